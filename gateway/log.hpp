@@ -1,0 +1,43 @@
+// Minimal leveled logger for the gateway process: one line per record,
+// "<UTC RFC 3339 time> <LEVEL> <message>", written to stderr.
+//
+// Records below warn are buffered and written by flush() (the event loop
+// flushes after each batch of work), so a saturated bus logged at debug does
+// not cost one write() per frame. warn and error are written at once.
+//
+// Thread safety: use from the io_context's thread only.
+#pragma once
+
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace gateway {
+
+enum class LogLevel { Trace, Debug, Info, Warn, Error };
+
+std::optional<LogLevel> parse_log_level(std::string_view s);
+
+class Logger {
+ public:
+  explicit Logger(LogLevel level = LogLevel::Info, std::FILE* out = stderr) : level_(level), out_(out) {}
+
+  bool enabled(LogLevel l) const { return l >= level_; }
+  void set_level(LogLevel l) { level_ = l; }
+  void log(LogLevel l, std::string_view msg);
+  void flush();
+
+  void trace(std::string_view m) { log(LogLevel::Trace, m); }
+  void debug(std::string_view m) { log(LogLevel::Debug, m); }
+  void info(std::string_view m) { log(LogLevel::Info, m); }
+  void warn(std::string_view m) { log(LogLevel::Warn, m); }
+  void error(std::string_view m) { log(LogLevel::Error, m); }
+
+ private:
+  LogLevel level_;
+  std::FILE* out_;
+  std::string buffer_;
+};
+
+}  // namespace gateway
