@@ -107,7 +107,8 @@ std::string to_string(const Frame& f) {
   }
   if (f.fd()) {
     s.push_back('#');
-    unsigned fl = (f.has(FrameFlag::BitRateSwitch) ? 1U : 0U) | (f.has(FrameFlag::ErrorStateIndicator) ? 2U : 0U);
+    // Same nibble as candump -L: CANFD_FDF (4) | CANFD_ESI (2) | CANFD_BRS (1).
+    unsigned fl = 4U | (f.has(FrameFlag::BitRateSwitch) ? 1U : 0U) | (f.has(FrameFlag::ErrorStateIndicator) ? 2U : 0U);
     s.push_back(kHex[fl]);
   }
   for (std::size_t i = 0; i < f.len; ++i) {
@@ -141,7 +142,8 @@ std::optional<Frame> parse_frame(std::string_view text) {
     f.set(FrameFlag::Fd);
     if (rest.size() < 2) return std::nullopt;
     int fl = hex_value(rest[1]);
-    if (fl < 0 || fl > 3) return std::nullopt;
+    // cansend accepts the nibble with or without the FDF bit (4).
+    if (fl < 0 || fl > 7) return std::nullopt;
     f.set(FrameFlag::BitRateSwitch, (fl & 1) != 0);
     f.set(FrameFlag::ErrorStateIndicator, (fl & 2) != 0);
     if (!parse_payload(rest.substr(2), f, kMaxFdLength)) return std::nullopt;

@@ -1,5 +1,5 @@
 // CAN and CAN FD frame value type, plus the text form used by can-utils
-// (cansend/candump -L: "123#DEADBEEF", "12345678#R", "123##1AABB").
+// (cansend/candump -L: "123#DEADBEEF", "12345678#R", "123##5AABB").
 //
 // A Frame is a plain value: copy it freely, no thread affinity.
 #pragma once
@@ -72,7 +72,9 @@ struct Frame {
 // Text form as accepted by cansend and printed by candump -L:
 //   <id>#<hex data>         classic (3 hex digits = 11-bit, 8 = 29-bit)
 //   <id>#R[<len>]           remote frame
-//   <id>##<flags><hex data> CAN FD, flags is one hex digit (1 = BRS, 2 = ESI)
+//   <id>##<flags><hex data> CAN FD, flags is one hex digit: 1 = BRS, 2 = ESI,
+//                           4 = FDF; printed with FDF set, as candump does,
+//                           and accepted with or without it, as cansend does
 std::string to_string(const Frame& f);
 
 // Parses the text form above; returns nullopt for anything malformed

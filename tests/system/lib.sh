@@ -1,0 +1,64 @@
+# Helpers for system test scripts; sourced inside UML (see uml-run.sh).
+set -eu
+: "${BUILD_DIR:?BUILD_DIR must point at the build tree}"
+GATEWAY=$BUILD_DIR/gateway/canopen-gateway
+CAN_TOOL=$BUILD_DIR/tests/can_tool
+T=${TMPDIR:-/tmp}
+GW_LOG=$T/gateway.log
+GW_PID=
+
+fail() { echo "FAIL: $*"; [ -f "$GW_LOG" ] && { echo "--- gateway log (last 40 lines)"; tail -n 40 "$GW_LOG"; }; exit 1; }
+pass() { echo "PASS: $*"; }
+
+# wait_candump: waits for the candump started last; fails if it timed out.
+wait_candump() {
+  local rc=0
+  wait "$CANDUMP_PID" || rc=$?
+  [ "$rc" -eq 0 ] || fail "candump did not see all expected frames (status $rc)"
+}
+
+# wait_for FILE PATTERN [SECONDS]: until grep -E finds PATTERN in FILE.
+wait_for() {
+  local file=$1 pattern=$2 limit=${3:-20} i=0
+  while [ $i -lt $((limit * 10)) ]; do
+    grep -qE -- "$pattern" "$file" 2>/dev/null && return 0
+    sleep 0.1; i=$((i + 1))
+  done
+  fail "timed out after ${limit}s waiting for /$pattern/ in $file"
+}
+
+# wait_count FILE PATTERN N [SECONDS]: until at least N lines match.
+wait_count() {
+  local file=$1 pattern=$2 n=$3 limit=${4:-30} i=0 c=0
+  while [ $i -lt $((limit * 10)) ]; do
+    c=$(grep -cE -- "$pattern" "$file" 2>/dev/null || true)
+    [ "${c:-0}" -ge "$n" ] && return 0
+    sleep 0.1; i=$((i + 1))
+  done
+  fail "timed out after ${limit}s: $c of $n lines matching /$pattern/ in $file"
+}
+
+start_gateway() {
+  "$GATEWAY" "$@" > "$GW_LOG" 2>&1 &
+  GW_PID=$!
+  wait_for "$GW_LOG" "canopen-gateway started" 20
+}
+
+# Stops the gateway with SIGTERM (or $1) and checks it exits 0.
+stop_gateway() {
+  local sig=${1:-TERM} rc=0
+  kill -"$sig" "$GW_PID"
+  wait "$GW_PID" || rc=$?
+  [ "$rc" -eq 0 ] || fail "gateway exited $rc after SIG$sig (expected 0)"
+  grep -q "stopped" "$GW_LOG" || fail "gateway log has no clean 'stopped' line"
+}
+
+# Starts candump -L on IFACE writing to FILE; waits until it is listening.
+# A large receive buffer (-r) so back-to-back bursts are not dropped by the
+# observer itself; a time limit so a missing frame fails instead of hanging.
+start_candump() {
+  local iface=$1 file=$2; shift 2
+  timeout 60 candump -L -r 16000000 "$@" "$iface" > "$file" 2>&1 &
+  CANDUMP_PID=$!
+  sleep 0.3
+}

@@ -1,0 +1,146 @@
+// Tests for gateway/cli.cpp: the canopen-gateway command line
+// (api-contract.md, "Command line").
+#include "cli.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+namespace gateway {
+namespace {
+
+using ::testing::HasSubstr;
+
+// Parses and returns the UsageError message; fails the test when no error.
+std::string usage_error(const std::vector<std::string>& args) {
+  try {
+    parse_cli(args);
+  } catch (const UsageError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected a UsageError";
+  return {};
+}
+
+TEST(Cli, SingleCanInterfaceWithDefaults) {
+  const CliOptions o = parse_cli({"--can", "can0"});
+  EXPECT_EQ(o.can_interfaces, (std::vector<std::string>{"can0"}));
+  EXPECT_EQ(o.node_id, 127);
+  EXPECT_EQ(o.log_level, LogLevel::Info);
+  EXPECT_FALSE(o.help);
+  EXPECT_FALSE(o.version);
+}
+
+TEST(Cli, CanRepeatsAndKeepsNetworkOrder) {
+  const CliOptions o = parse_cli({"--can", "vcan1", "--can", "can0", "--can=vcan7"});
+  EXPECT_EQ(o.can_interfaces, (std::vector<std::string>{"vcan1", "can0", "vcan7"}));
+}
+
+TEST(Cli, NoInterfaceIsAnError) {
+  EXPECT_THAT(usage_error({}), HasSubstr("--can"));
+  EXPECT_THAT(usage_error({"--node-id", "5"}), HasSubstr("no CAN interface"));
+}
+
+TEST(Cli, HelpAndVersionNeedNoInterface) {
+  EXPECT_TRUE(parse_cli({"--help"}).help);
+  EXPECT_TRUE(parse_cli({"-h"}).help);
+  EXPECT_TRUE(parse_cli({"--version"}).version);
+}
+
+TEST(Cli, NodeIdInRange) {
+  EXPECT_EQ(parse_cli({"--can", "can0", "--node-id", "1"}).node_id, 1);
+  EXPECT_EQ(parse_cli({"--can", "can0", "--node-id", "127"}).node_id, 127);
+  EXPECT_EQ(parse_cli({"--can", "can0", "--node-id=42"}).node_id, 42);
+}
+
+TEST(Cli, NodeIdOutOfRangeIsRejected) {
+  for (const char* v : {"0", "128", "-1", "255", "1000"}) {
+    const std::string msg = usage_error({"--can", "can0", "--node-id", v});
+    EXPECT_THAT(msg, HasSubstr("--node-id")) << v;
+    EXPECT_THAT(msg, HasSubstr("1..127")) << v;
+  }
+}
+
+TEST(Cli, NodeIdMustBeADecimalNumber) {
+  for (const char* v : {"", "abc", "12abc", "0x10", " 5", "5 ", "+5", "99999999999999999999"}) {
+    const std::string msg = usage_error({"--can", "can0", "--node-id", v});
+    EXPECT_THAT(msg, HasSubstr("--node-id")) << '"' << v << '"';
+  }
+}
+
+TEST(Cli, LogLevels) {
+  const std::pair<const char*, LogLevel> cases[] = {
+      {"trace", LogLevel::Trace}, {"debug", LogLevel::Debug}, {"info", LogLevel::Info},
+      {"warn", LogLevel::Warn},   {"error", LogLevel::Error},
+  };
+  for (const auto& [text, level] : cases) {
+    EXPECT_EQ(parse_cli({"--can", "can0", "--log-level", text}).log_level, level) << text;
+    EXPECT_EQ(parse_cli({"--can", "can0", std::string("--log-level=") + text}).log_level, level) << text;
+  }
+}
+
+TEST(Cli, UnknownLogLevelIsRejected) {
+  const std::string msg = usage_error({"--can", "can0", "--log-level", "verbose"});
+  EXPECT_THAT(msg, HasSubstr("--log-level"));
+  EXPECT_THAT(msg, HasSubstr("verbose"));
+}
+
+TEST(Cli, MissingValueIsRejected) {
+  EXPECT_THAT(usage_error({"--can"}), HasSubstr("--can: missing value"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--node-id"}), HasSubstr("--node-id: missing value"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--log-level"}), HasSubstr("--log-level: missing value"));
+}
+
+TEST(Cli, InterfaceNameLengthLimitIsFifteen) {
+  const std::string max(15, 'c');
+  EXPECT_EQ(parse_cli({"--can", max}).can_interfaces, (std::vector<std::string>{max}));
+  EXPECT_THAT(usage_error({"--can", std::string(16, 'c')}), HasSubstr("--can"));
+  EXPECT_THAT(usage_error({"--can", ""}), HasSubstr("--can"));
+  EXPECT_THAT(usage_error({"--can="}), HasSubstr("--can"));
+}
+
+TEST(Cli, UnknownOptionIsRejectedAndNamed) {
+  EXPECT_THAT(usage_error({"--can", "can0", "--bogus"}), HasSubstr("'--bogus'"));
+  EXPECT_THAT(usage_error({"--can", "can0", "stray"}), HasSubstr("'stray'"));
+  EXPECT_THAT(usage_error({"--can", "can0", "-x"}), HasSubstr("'-x'"));
+}
+
+TEST(Cli, ContractFlagsNotImplementedYetAreRefused) {
+  for (const char* flag : {"--config", "--eds", "--mqtt", "--mqtt-format", "--http", "--gateway-id", "--demo"}) {
+    const std::string msg = usage_error({"--can", "can0", flag, "x"});
+    EXPECT_THAT(msg, HasSubstr(flag));
+    EXPECT_THAT(msg, HasSubstr("not supported"));
+  }
+  EXPECT_THAT(usage_error({"--can", "can0", "--http=127.0.0.1:8080"}), HasSubstr("--http"));
+}
+
+TEST(Cli, UsageErrorIsOneLine) {
+  const std::vector<std::vector<std::string>> bad = {
+      {}, {"--can"}, {"--can", "can0", "--node-id", "0"}, {"--bogus"}, {"--can", "can0", "--log-level", "x"}};
+  for (const auto& args : bad) {
+    const std::string msg = usage_error(args);
+    EXPECT_FALSE(msg.empty());
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
+}
+
+TEST(Cli, LastValueWinsForSingleValuedFlags) {
+  const CliOptions o = parse_cli({"--can", "can0", "--node-id", "5", "--node-id", "6", "--log-level", "debug",
+                                  "--log-level", "error"});
+  EXPECT_EQ(o.node_id, 6);
+  EXPECT_EQ(o.log_level, LogLevel::Error);
+}
+
+TEST(Cli, UsageTextListsContractFlags) {
+  const std::string u = usage_text();
+  for (const char* flag : {"--config", "--can", "--node-id", "--eds", "--mqtt", "--mqtt-format", "--http",
+                           "--gateway-id", "--demo", "--log-level"}) {
+    EXPECT_THAT(u, HasSubstr(flag));
+  }
+  EXPECT_EQ(u.rfind("usage: canopen-gateway", 0), 0U);
+}
+
+}  // namespace
+}  // namespace gateway
