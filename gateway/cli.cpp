@@ -40,16 +40,24 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
     }
     auto take_value = [&]() -> std::string {
       if (has_inline_value) return value;
-      if (i + 1 >= args.size()) throw UsageError(flag + ": missing value");
+      if (i + 1 >= args.size() || args[i + 1].rfind("--", 0) == 0) throw UsageError(flag + ": missing value");
       return args[++i];
     };
+    auto no_value = [&] {
+      if (has_inline_value) throw UsageError(flag + " takes no value");
+    };
     if (flag == "-h" || flag == "--help") {
+      no_value();
       o.help = true;
     } else if (flag == "--version") {
+      no_value();
       o.version = true;
     } else if (flag == "--can") {
       std::string iface = take_value();
-      if (iface.empty() || iface.size() > 15) throw UsageError("--can: '" + iface + "' is not an interface name");
+      // Linux interface names: 1..15 bytes, no '/', ':' or white space, not "." or "..".
+      const bool bad = iface.empty() || iface.size() > 15 || iface == "." || iface == ".." ||
+                       iface.find_first_of("/: \t\n") != std::string::npos;
+      if (bad) throw UsageError("--can: '" + iface + "' is not an interface name");
       o.can_interfaces.push_back(iface);
     } else if (flag == "--node-id") {
       const std::string v = take_value();

@@ -40,7 +40,10 @@ void Logger::log(LogLevel l, std::string_view msg) {
   buffer_.push_back(' ');
   buffer_.append(kNames[static_cast<int>(l)]);
   buffer_.push_back(' ');
-  buffer_.append(msg);
+  for (char c : msg) {
+    if (c == '\n') buffer_.append("\\n");
+    else buffer_.push_back(c);
+  }
   buffer_.push_back('\n');
   if (l >= LogLevel::Warn || buffer_.size() > 64 * 1024) flush();
 }

@@ -1,5 +1,6 @@
 // Minimal leveled logger for the gateway process: one line per record,
-// "<UTC RFC 3339 time> <LEVEL> <message>", written to stderr.
+// "<UTC RFC 3339 time> <LEVEL> <message>", written to stderr. Newlines in a
+// message are written as "\n" so a record is always one line.
 //
 // Records below warn are buffered and written by flush() (the event loop
 // flushes after each batch of work), so a saturated bus logged at debug does
@@ -22,6 +23,9 @@ std::optional<LogLevel> parse_log_level(std::string_view s);
 class Logger {
  public:
   explicit Logger(LogLevel level = LogLevel::Info, std::FILE* out = stderr) : level_(level), out_(out) {}
+  ~Logger() { flush(); }
+  Logger(const Logger&) = delete;
+  Logger& operator=(const Logger&) = delete;
 
   bool enabled(LogLevel l) const { return l >= level_; }
   void set_level(LogLevel l) { level_ = l; }

@@ -26,7 +26,11 @@ std::string_view to_string(BusEventCause c) {
 }
 
 std::optional<BusEvent> BusStateTracker::move_to(BusState next, BusEventCause cause) {
-  if (next == state_ && cause != BusEventCause::ControllerRestarted) return std::nullopt;
+  // Same state: only a restart, or a down link that is now removed, is news.
+  if (next == state_ && cause != BusEventCause::ControllerRestarted &&
+      !(cause == BusEventCause::LinkRemoved && last_cause_ != BusEventCause::LinkRemoved))
+    return std::nullopt;
+  last_cause_ = cause;
   BusEvent ev;
   ev.previous = state_;
   ev.state = next;

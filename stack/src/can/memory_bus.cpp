@@ -45,7 +45,14 @@ std::unique_ptr<MemoryEndpoint> MemoryBus::attach(std::string name) {
 }
 
 void MemoryBus::detach(const MemoryEndpoint& ep) {
-  std::erase(endpoints_, &ep);
+  // During delivery the slot is only cleared, so the loop's indexes stay
+  // valid; deliver_one() compacts afterwards.
+  if (delivering_ > 0) {
+    std::replace(endpoints_.begin(), endpoints_.end(), const_cast<MemoryEndpoint*>(&ep),
+                 static_cast<MemoryEndpoint*>(nullptr));
+  } else {
+    std::erase(endpoints_, &ep);
+  }
   // Frames already on the bus stay there: the wire does not care that the
   // sender went away. Only the dangling sender pointer is cleared.
   for (auto& q : queue_) {
@@ -88,13 +95,17 @@ bool MemoryBus::deliver_one() {
   if (queue_.empty()) return false;
   Queued q = std::move(queue_.front());
   queue_.pop_front();
-  // Copy the list: a handler may attach or destroy endpoints.
-  const std::vector<MemoryEndpoint*> targets = endpoints_;
-  for (MemoryEndpoint* ep : targets) {
-    if (ep == q.sender || ep->state() == BusState::Down) continue;
-    if (std::find(endpoints_.begin(), endpoints_.end(), ep) == endpoints_.end()) continue;
+  // Handlers may attach endpoints (they join after this frame) or destroy
+  // them (their slot is nulled), so iterate by index over the current size.
+  // A handler may even deliver (nested): only the outermost level compacts.
+  ++delivering_;
+  const std::size_t n = endpoints_.size();
+  for (std::size_t i = 0; i < n && i < endpoints_.size(); ++i) {
+    MemoryEndpoint* ep = endpoints_[i];
+    if (ep == nullptr || ep == q.sender || ep->state() == BusState::Down) continue;
     ep->receive(q.frame);
   }
+  if (--delivering_ == 0) std::erase(endpoints_, nullptr);
   return true;
 }
 

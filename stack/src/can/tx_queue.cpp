@@ -25,6 +25,7 @@ void TxQueue::clear() {
 void TxQueue::on_written() {
   ++written_;
   consecutive_no_buffers_ = 0;
+  retry_delay_ = first_retry_;
 }
 
 void TxQueue::on_no_buffers() {

@@ -15,7 +15,7 @@ can::ErrorFrameInfo decode_error(const canfd_frame& raw) {
   can::ErrorFrameInfo e;
   e.bus_off = (cls & CAN_ERR_BUSOFF) != 0;
   e.restarted = (cls & CAN_ERR_RESTARTED) != 0;
-  e.protocol_error = (cls & (CAN_ERR_PROT | CAN_ERR_ACK | CAN_ERR_BUSERROR | CAN_ERR_LOSTARB)) != 0;
+  e.protocol_error = (cls & (CAN_ERR_PROT | CAN_ERR_ACK | CAN_ERR_BUSERROR)) != 0;
   if (cls & CAN_ERR_CRTL) {
     const std::uint8_t c = raw.data[1];
     e.controller = true;

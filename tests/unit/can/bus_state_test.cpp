@@ -278,5 +278,16 @@ TEST(BusStateTracker, BusOffToLinkDownToUp) {
   EXPECT_EQ(t.state(), BusState::ErrorActive);
 }
 
+TEST(BusStateTracker, RemovalAfterLinkDownIsStillReported) {
+  auto t = up_tracker();
+  ASSERT_TRUE(t.on_link_down(false));
+  const auto removed = t.on_link_down(true);
+  ASSERT_TRUE(removed) << "an interface deleted while down must be reported as removed";
+  EXPECT_EQ(removed->cause, BusEventCause::LinkRemoved);
+  EXPECT_EQ(removed->previous, BusState::Down);
+  EXPECT_FALSE(t.on_link_down(true));
+  EXPECT_FALSE(t.on_link_down(false));
+}
+
 }  // namespace
 }  // namespace canopen::can

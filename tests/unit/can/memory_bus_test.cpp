@@ -280,6 +280,103 @@ TEST(MemoryBusDeathTest, EndpointAttachedInPlaceOfDestroyedOneDoesNotGetCurrentF
       ::testing::ExitedWithCode(0), "");
 }
 
+TEST(MemoryBus, BusKeepsWorkingAfterEndpointsDestroyedDuringDelivery) {
+  MemoryBus bus;
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto c = bus.attach("c");
+  auto d = bus.attach("d");
+  Recorder ra, rd;
+  ra.attach_to(*a);
+  rd.attach_to(*d);
+  // b destroys c and itself on the first frame.
+  b->on_frames([&](std::span<const Frame>) {
+    c.reset();
+    b.reset();
+  });
+  a->send(numbered(0x100, 1));
+  EXPECT_EQ(bus.deliver(), 1U);
+  EXPECT_EQ(b, nullptr);
+  EXPECT_EQ(c, nullptr);
+
+  auto e = bus.attach("e");
+  Recorder re;
+  re.attach_to(*e);
+  a->send(numbered(0x100, 2));
+  d->send(numbered(0x100, 3));
+  EXPECT_EQ(bus.deliver(), 2U);
+  EXPECT_EQ(first_bytes(rd.frames), (std::vector<std::uint8_t>{1, 2}));
+  EXPECT_EQ(first_bytes(re.frames), (std::vector<std::uint8_t>{2, 3}));
+  EXPECT_EQ(first_bytes(ra.frames), (std::vector<std::uint8_t>{3}));
+}
+
+TEST(MemoryBus, EndpointAttachedByHandlerJoinsAfterTheCurrentFrame) {
+  MemoryBus bus;
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  std::unique_ptr<MemoryEndpoint> late;
+  Recorder rlate;
+  b->on_frames([&](std::span<const Frame>) {
+    if (!late) {
+      late = bus.attach("late");
+      rlate.attach_to(*late);
+    }
+  });
+  a->send(numbered(0x100, 1));
+  a->send(numbered(0x100, 2));
+  EXPECT_EQ(bus.deliver(), 2U);
+  EXPECT_EQ(first_bytes(rlate.frames), (std::vector<std::uint8_t>{2}));
+}
+
+TEST(MemoryBus, HandlerDestroyingAnEndpointItJustAttachedIsSafe) {
+  MemoryBus bus;
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto c = bus.attach("c");
+  Recorder rc;
+  rc.attach_to(*c);
+  b->on_frames([&](std::span<const Frame>) {
+    auto tmp = bus.attach("tmp");
+    tmp.reset();
+  });
+  a->send(numbered(0x100, 1));
+  a->send(numbered(0x100, 2));
+  EXPECT_EQ(bus.deliver(), 2U);
+  EXPECT_EQ(first_bytes(rc.frames), (std::vector<std::uint8_t>{1, 2}));
+}
+
+TEST(MemoryBus, NestedDeliveryFromHandlerDeliversEachFrameOncePerReceiver) {
+  MemoryBus bus;
+  auto a = bus.attach("a");
+  auto b = bus.attach("b");
+  auto c = bus.attach("c");
+  auto d = bus.attach("d");
+  Recorder rc;
+  rc.attach_to(*c);
+  int nested = 0;
+  b->on_frames([&](std::span<const Frame>) {
+    if (nested++ == 0) {
+      d.reset();      // destroyed inside the nested delivery's outer frame
+      bus.deliver();  // a handler pumping the bus itself
+    }
+  });
+  for (std::uint8_t i = 0; i < 3; ++i) a->send(numbered(0x100, i));
+  bus.deliver();
+  EXPECT_EQ(bus.pending(), 0U);
+  auto got = first_bytes(rc.frames);
+  std::sort(got.begin(), got.end());
+  EXPECT_EQ(got, (std::vector<std::uint8_t>{0, 1, 2}));
+  EXPECT_EQ(nested, 3);
+  // The bus is consistent afterwards.
+  auto e = bus.attach("e");
+  Recorder re;
+  re.attach_to(*e);
+  a->send(numbered(0x100, 9));
+  bus.deliver();
+  EXPECT_EQ(first_bytes(re.frames), (std::vector<std::uint8_t>{9}));
+  EXPECT_EQ(rc.frames.size(), 4U);
+}
+
 TEST(MemoryBus, FramesFromDestroyedSenderStillReachOthers) {
   MemoryBus bus;
   auto a = bus.attach("a");

@@ -391,5 +391,17 @@ TEST(TxQueue, WriterCanBeALambda) {
   EXPECT_EQ(calls, 1);
 }
 
+TEST(TxQueue, ReportedRetryDelayResetsAfterSuccessfulWrite) {
+  TxQueue q(8, milliseconds(1), milliseconds(32));
+  FakeWriter w;
+  w.then(WriteResult::NoBuffers, 3);
+  q.push(numbered(0));
+  q.push(numbered(1));
+  for (int i = 0; i < 3; ++i) ASSERT_EQ(q.flush(w), FlushResult::NoBuffers);
+  EXPECT_EQ(q.retry_delay(), milliseconds(4));
+  ASSERT_EQ(q.flush(w), FlushResult::Drained);
+  EXPECT_EQ(q.retry_delay(), milliseconds(1));
+}
+
 }  // namespace
 }  // namespace canopen::can

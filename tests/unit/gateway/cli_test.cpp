@@ -142,5 +142,22 @@ TEST(Cli, UsageTextListsContractFlags) {
   EXPECT_EQ(u.rfind("usage: canopen-gateway", 0), 0U);
 }
 
+TEST(Cli, AFlagIsNotTakenAsTheValueOfTheOneBefore) {
+  EXPECT_THAT(usage_error({"--can", "--help"}), HasSubstr("--can: missing value"));
+  EXPECT_THAT(usage_error({"--node-id", "--can", "vcan0"}), HasSubstr("--node-id: missing value"));
+}
+
+TEST(Cli, FlagsWithoutValueRefuseOne) {
+  EXPECT_THAT(usage_error({"--help=x"}), HasSubstr("--help takes no value"));
+  EXPECT_THAT(usage_error({"--version=1"}), HasSubstr("--version takes no value"));
+}
+
+TEST(Cli, InterfaceNamesFollowLinuxRules) {
+  for (const char* bad : {"a/b", "can 0", "can:0", ".", ".."}) {
+    EXPECT_THAT(usage_error({"--can", bad}), HasSubstr("is not an interface name")) << bad;
+  }
+  EXPECT_EQ(parse_cli({"--can", "can0.1"}).can_interfaces.front(), "can0.1");
+}
+
 }  // namespace
 }  // namespace gateway

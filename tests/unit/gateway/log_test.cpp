@@ -257,5 +257,25 @@ TEST(Logger, LogWithExplicitLevel) {
   EXPECT_EQ(message_of(lines[0]), "via log()");
 }
 
+TEST(Logger, NewlinesInAMessageStayOnOneLine) {
+  Capture cap;
+  Logger log(LogLevel::Info, cap.file());
+  log.warn("first\nsecond");
+  const auto lines = cap.lines();
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(message_of(lines[0]), "first\\nsecond");
+}
+
+TEST(Logger, BufferedRecordsAreWrittenWhenTheLoggerIsDestroyed) {
+  Capture cap;
+  {
+    Logger log(LogLevel::Debug, cap.file());
+    log.debug("last words");
+  }
+  const auto lines = cap.lines();
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(message_of(lines[0]), "last words");
+}
+
 }  // namespace
 }  // namespace gateway

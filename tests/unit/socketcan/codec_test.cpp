@@ -356,9 +356,11 @@ TEST(SocketCanCodec, DecodeErrorIgnoresControllerByteWithoutControllerClass) {
 }
 
 TEST(SocketCanCodec, DecodeErrorProtocolClasses) {
-  for (canid_t cls : {CAN_ERR_PROT, CAN_ERR_ACK, CAN_ERR_BUSERROR, CAN_ERR_LOSTARB}) {
+  for (canid_t cls : {CAN_ERR_PROT, CAN_ERR_ACK, CAN_ERR_BUSERROR}) {
     EXPECT_TRUE(decode_error(error_frame(cls)).protocol_error) << cls;
   }
+  // Losing arbitration is how CAN resolves contention, not an error.
+  EXPECT_FALSE(decode_error(error_frame(CAN_ERR_LOSTARB)).protocol_error);
   EXPECT_FALSE(decode_error(error_frame(CAN_ERR_BUSOFF)).protocol_error);
   EXPECT_FALSE(decode_error(error_frame(CAN_ERR_CRTL)).protocol_error);
 }

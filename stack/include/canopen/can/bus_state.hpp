@@ -76,6 +76,7 @@ class BusStateTracker {
   std::optional<BusEvent> move_to(BusState next, BusEventCause cause);
 
   BusState state_ = BusState::Down;
+  BusEventCause last_cause_ = BusEventCause::LinkDown;
   std::uint16_t tx_errors_ = 0, rx_errors_ = 0;
   std::uint64_t protocol_errors_ = 0;
 };

@@ -104,6 +104,7 @@ class MemoryBus {
   std::function<Frame::Clock::time_point()> now_;
   std::uint64_t sent_ = 0;
   std::uint64_t lost_ = 0;
+  unsigned delivering_ = 0;  // nesting depth of deliver_one()
 };
 
 }  // namespace canopen::can
