@@ -62,6 +62,7 @@ int run(const gateway::CliOptions& opts) {
       const bool bad = ev.state != canopen::can::BusState::ErrorActive ||
                        ev.cause == canopen::can::BusEventCause::RxOverflow;
       log.log(bad ? gateway::LogLevel::Warn : gateway::LogLevel::Info, msg);
+      log.flush();  // rare and important: never left waiting in the buffer
     });
     if (ch.state() == canopen::can::BusState::Down) log.warn(prefix + " is down; waiting for it to come up");
     // Boot-up: COB-ID 700h + node-ID, one data byte 00h.

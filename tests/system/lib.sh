@@ -60,5 +60,14 @@ start_candump() {
   local iface=$1 file=$2; shift 2
   timeout 60 candump -L -r 16000000 "$@" "$iface" > "$file" 2>&1 &
   CANDUMP_PID=$!
-  sleep 0.3
+  # Listening once candump (timeout's child) holds its CAN socket; the short
+  # sleep after covers setsockopt/bind, which follow socket() at once.
+  local i=0
+  while [ $i -lt 100 ]; do
+    for p in $(pgrep -P "$CANDUMP_PID" candump 2>/dev/null); do
+      ls -l /proc/"$p"/fd 2>/dev/null | grep -q 'socket:' && { sleep 0.1; return 0; }
+    done
+    sleep 0.05; i=$((i + 1))
+  done
+  fail "candump on $iface did not start"
 }
