@@ -1,6 +1,7 @@
 // Tests for stack/src/can/frame.cpp: the CAN/CAN FD frame value type and its
 // cansend / candump -L text form.
 #include "canopen/can/frame.hpp"
+#include "support/frames.hpp"
 
 #include <gtest/gtest.h>
 
@@ -19,17 +20,7 @@ std::vector<std::uint8_t> counting_bytes(std::size_t n, std::uint8_t first = 0) 
   return v;
 }
 
-Frame fd_frame(std::uint32_t id, std::size_t len, bool extended = false, bool brs = false, bool esi = false) {
-  Frame f;
-  f.id = id;
-  f.set(FrameFlag::Extended, extended);
-  f.set(FrameFlag::Fd);
-  f.set(FrameFlag::BitRateSwitch, brs);
-  f.set(FrameFlag::ErrorStateIndicator, esi);
-  f.len = static_cast<std::uint8_t>(len);
-  for (std::size_t i = 0; i < len; ++i) f.data[i] = static_cast<std::uint8_t>(0xA0 + i);
-  return f;
-}
+using test::fd_frame;
 
 // ---- FD lengths --------------------------------------------------------------
 

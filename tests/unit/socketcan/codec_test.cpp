@@ -3,6 +3,7 @@
 // recvmsg() control-message parsing. No sockets: the kernel structures are
 // built by hand.
 #include "canopen/socketcan/codec.hpp"
+#include "support/frames.hpp"
 
 #include <gtest/gtest.h>
 #include <linux/can/error.h>
@@ -33,16 +34,10 @@ canfd_frame garbage() {
   return raw;
 }
 
+// Payload counting from 0x40, unlike the default, so codec tests use
+// different bytes than frame tests.
 Frame fd_frame(std::uint32_t id, std::size_t len, bool extended, bool brs, bool esi) {
-  Frame f;
-  f.id = id;
-  f.set(FrameFlag::Extended, extended);
-  f.set(FrameFlag::Fd);
-  f.set(FrameFlag::BitRateSwitch, brs);
-  f.set(FrameFlag::ErrorStateIndicator, esi);
-  f.len = static_cast<std::uint8_t>(len);
-  for (std::size_t i = 0; i < len; ++i) f.data[i] = static_cast<std::uint8_t>(0x40 + i);
-  return f;
+  return test::fd_frame(id, len, extended, brs, esi, 0x40);
 }
 
 // ---- sizes the kernel uses -------------------------------------------------
