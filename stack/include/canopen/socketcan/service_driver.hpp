@@ -1,0 +1,67 @@
+// Binds sans-I/O protocol services to a can::Channel and the io_context's
+// steady clock: every received frame is offered to every service, and one
+// steady_timer fires at the earliest deadline any service asks for.
+//
+// A service is anything with
+//   void on_frame(const can::Frame&, TimePoint now);
+//   void on_time(TimePoint now);
+//   TimePoint next_deadline() const;   // TimePoint::max() when idle
+// Callers that change a service from outside (e.g. submit an SDO request)
+// MUST call poke() afterwards so the timer follows the new deadline.
+//
+// Thread safety: io_context thread only. Services must outlive the driver
+// or be removed first.
+#pragma once
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <functional>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "canopen/can/channel.hpp"
+#include "canopen/clock.hpp"
+
+namespace canopen::socketcan {
+
+class ServiceDriver {
+ public:
+  ServiceDriver(boost::asio::io_context& io, can::Channel& channel);
+  ~ServiceDriver();
+  ServiceDriver(const ServiceDriver&) = delete;
+  ServiceDriver& operator=(const ServiceDriver&) = delete;
+
+  template <typename Service>
+  void add(Service& s) {
+    entries_.push_back(Entry{&s, [&s](const can::Frame& f, TimePoint now) { s.on_frame(f, now); },
+                             [&s](TimePoint now) { s.on_time(now); }, [&s] { return s.next_deadline(); }});
+    poke();
+  }
+  void remove(const void* service);
+
+  // Also called with every received batch, after the services (e.g. logging).
+  void on_frames(can::Channel::FrameHandler tap) { tap_ = std::move(tap); }
+
+  // Re-arms the timer for the earliest deadline.
+  void poke();
+
+ private:
+  struct Entry {
+    const void* id;
+    std::function<void(const can::Frame&, TimePoint)> on_frame;
+    std::function<void(TimePoint)> on_time;
+    std::function<TimePoint()> next_deadline;
+  };
+  void on_timer();
+
+  can::Channel& channel_;
+  boost::asio::steady_timer timer_;
+  std::vector<Entry> entries_;
+  can::Channel::FrameHandler tap_;
+  TimePoint armed_for_ = TimePoint::max();
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
+};
+
+}  // namespace canopen::socketcan

@@ -1,0 +1,55 @@
+#include "canopen/socketcan/service_driver.hpp"
+
+#include <algorithm>
+
+namespace canopen::socketcan {
+
+ServiceDriver::ServiceDriver(boost::asio::io_context& io, can::Channel& channel) : channel_(channel), timer_(io) {
+  channel_.on_frames([this, alive = std::weak_ptr<bool>(alive_)](std::span<const can::Frame> frames) {
+    if (alive.expired()) return;
+    const TimePoint now = SteadyClock::now();
+    for (const auto& f : frames) {
+      for (std::size_t i = 0; i < entries_.size(); ++i) entries_[i].on_frame(f, now);
+    }
+    if (tap_) tap_(frames);
+    poke();
+  });
+}
+
+ServiceDriver::~ServiceDriver() {
+  *alive_ = false;
+  alive_.reset();
+  channel_.on_frames(nullptr);
+  timer_.cancel();
+}
+
+void ServiceDriver::remove(const void* service) {
+  std::erase_if(entries_, [service](const Entry& e) { return e.id == service; });
+}
+
+void ServiceDriver::poke() {
+  TimePoint next = TimePoint::max();
+  for (const auto& e : entries_) next = std::min(next, e.next_deadline());
+  if (next == armed_for_) return;
+  armed_for_ = next;
+  if (next == TimePoint::max()) {
+    timer_.cancel();
+    return;
+  }
+  timer_.expires_at(next);
+  timer_.async_wait([this, alive = std::weak_ptr<bool>(alive_)](const boost::system::error_code& ec) {
+    if (ec || alive.expired()) return;
+    on_timer();
+  });
+}
+
+void ServiceDriver::on_timer() {
+  armed_for_ = TimePoint::max();
+  const TimePoint now = SteadyClock::now();
+  for (std::size_t i = 0; i < entries_.size(); ++i) {
+    if (entries_[i].next_deadline() <= now) entries_[i].on_time(now);
+  }
+  poke();
+}
+
+}  // namespace canopen::socketcan
