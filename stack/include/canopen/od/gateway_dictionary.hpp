@@ -4,7 +4,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <string>
+#include <system_error>
 
 #include "canopen/od/object_dictionary.hpp"
 
@@ -26,6 +28,14 @@ struct GatewayDictionaryOptions {
   std::uint8_t heartbeat_consumers = 8;       // 1016h entries
   std::uint8_t sdo_clients = 127;             // 1280h.. one client channel per possible node
   std::uint8_t rpdos = 4, tpdos = 4;          // 1400h/1600h, 1800h/1A00h
+  // Called when "save" is written to 1010h sub N / "load" to 1011h sub N
+  // (1 all, 2 communication, 3 application parameters). Returning an error
+  // aborts the download with it (the standard suggests 0606 0000h when the
+  // storage fails). Unset: the signature is accepted and nothing is stored.
+  // (The "= nullptr" spares callers that list only the fields above a
+  // -Wmissing-field-initializers warning.)
+  std::function<std::error_code(std::uint8_t sub)> on_store = nullptr;
+  std::function<std::error_code(std::uint8_t sub)> on_restore = nullptr;
 };
 
 // Builds the dictionary for `node_id` (1..127): 1000h, 1001h, 1003h, 1005h,
@@ -33,5 +43,10 @@ struct GatewayDictionaryOptions {
 // 1280h..., 1400h/1600h, 1800h/1A00h, with hooks enforcing the value rules.
 ObjectDictionary make_gateway_dictionary(std::uint8_t node_id, const GatewayIdentity& identity,
                                          const GatewayDictionaryOptions& options = {});
+
+// Records an error in 1003h (7.5.2.4): the newest at sub 1, older ones move
+// down one sub-index, the oldest falls off when the history is full; sub 0
+// counts the entries. No-op when the dictionary has no 1003h.
+void push_error_history(ObjectDictionary& od, std::uint32_t error_field);
 
 }  // namespace canopen::od

@@ -70,6 +70,13 @@ using ReadHook = std::function<Result<Bytes>(const SubEntry& entry)>;
 // entries (e.g. 1003h sub 0 = 0 clears the history).
 using WriteHook = std::function<std::error_code(SubEntry& entry, const Value& new_value)>;
 
+class ObjectDictionary;
+// Hooks that need other entries (1019h looks at 1006h, a PDO mapping at the
+// mapped objects) get the dictionary as a parameter instead of capturing it,
+// so they stay correct when the dictionary is moved or copied.
+using DictReadHook = std::function<Result<Bytes>(const ObjectDictionary& od, const SubEntry& entry)>;
+using DictWriteHook = std::function<std::error_code(ObjectDictionary& od, SubEntry& entry, const Value& new_value)>;
+
 class ObjectDictionary {
  public:
   // Adds or replaces the object at obj.index.
@@ -104,11 +111,18 @@ class ObjectDictionary {
   // Hooks apply to every sub-entry of the index; one of each kind per index.
   void on_read(std::uint16_t index, ReadHook hook);
   void on_write(std::uint16_t index, WriteHook hook);
+  // The same with the dictionary passed in. Each index has at most one read
+  // and one write hook: setting either form replaces the other; an empty
+  // function removes it. erase() removes an index's hooks, insert() keeps them.
+  void on_dict_read(std::uint16_t index, DictReadHook hook);
+  void on_dict_write(std::uint16_t index, DictWriteHook hook);
 
  private:
   std::map<std::uint16_t, Object> objects_;
   std::map<std::uint16_t, ReadHook> read_hooks_;
   std::map<std::uint16_t, WriteHook> write_hooks_;
+  std::map<std::uint16_t, DictReadHook> dict_read_hooks_;
+  std::map<std::uint16_t, DictWriteHook> dict_write_hooks_;
 };
 
 // Builders for the common object shapes (name, type, access per sub-entry).
