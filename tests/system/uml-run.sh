@@ -52,8 +52,8 @@ trap cleanup EXIT
 mkdir -p "$work/tmp"
 
 cat > "$work/init.sh" <<INIT
-#!/bin/sh
-# PID 1 inside UML: set up the kernel, run the test, record its status, halt.
+#!/bin/bash
+# PID 1 inside UML (bash: env.sh uses its quoting for arbitrary arguments): set up the kernel, run the test, record its status, halt.
 mount -t proc proc /proc
 mount -t sysfs sysfs /sys
 mount -t tmpfs tmpfs /run 2>/dev/null

@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <algorithm>
 #include <deque>
+#include <span>
 #include <functional>
 #include <vector>
 
@@ -401,6 +403,103 @@ TEST(TxQueue, ReportedRetryDelayResetsAfterSuccessfulWrite) {
   EXPECT_EQ(q.retry_delay(), milliseconds(4));
   ASSERT_EQ(q.flush(w), FlushResult::Drained);
   EXPECT_EQ(q.retry_delay(), milliseconds(1));
+}
+
+// ---- flush_batch: runs of frames for sendmmsg ---------------------------------
+
+// A batch writer scripted with (how many it takes, why it stops).
+struct FakeBatchWriter {
+  std::deque<BatchWrite> script;
+  std::vector<std::uint16_t> accepted;
+  std::vector<std::size_t> offered_sizes;
+
+  BatchWrite operator()(std::span<const Frame> run) {
+    offered_sizes.push_back(run.size());
+    BatchWrite r{run.size(), WriteResult::Written};
+    if (!script.empty()) {
+      r = script.front();
+      script.pop_front();
+      r.written = std::min(r.written, run.size());
+    }
+    for (std::size_t i = 0; i < r.written; ++i) accepted.push_back(number_of(run[i]));
+    return r;
+  }
+};
+
+TEST(TxQueueBatch, RunsAreContiguousAndRespectMaxBatch) {
+  TxQueue q(100);
+  for (std::uint16_t i = 0; i < 10; ++i) q.push(numbered(i));
+  FakeBatchWriter w;
+  EXPECT_EQ(q.flush_batch(w, 4), FlushResult::Drained);
+  EXPECT_EQ(w.accepted, range(0, 10));
+  EXPECT_EQ(w.offered_sizes, (std::vector<std::size_t>{4, 4, 2}));
+  EXPECT_EQ(q.written(), 10U);
+}
+
+TEST(TxQueueBatch, RingWrapAroundKeepsOrder) {
+  TxQueue q(8);
+  FakeBatchWriter w;
+  for (std::uint16_t i = 0; i < 6; ++i) q.push(numbered(i));
+  w.script.push_back({6, WriteResult::Written});
+  ASSERT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
+  // The head is now at slot 6: the next 8 frames wrap around the ring.
+  for (std::uint16_t i = 6; i < 14; ++i) ASSERT_TRUE(q.push(numbered(i)));
+  EXPECT_FALSE(q.push(numbered(99))) << "capacity is still 8";
+  ASSERT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
+  EXPECT_EQ(w.accepted, range(0, 14));
+  EXPECT_EQ(w.offered_sizes.back(), 6U) << "second run starts at slot 0 after the wrap";
+}
+
+TEST(TxQueueBatch, PartialWriteOffersTheRestAgain) {
+  TxQueue q(16);
+  for (std::uint16_t i = 0; i < 10; ++i) q.push(numbered(i));
+  FakeBatchWriter w;
+  w.script.push_back({3, WriteResult::Written});  // sendmmsg sent 3, no error reported
+  EXPECT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
+  EXPECT_EQ(w.accepted, range(0, 10));
+}
+
+TEST(TxQueueBatch, NoBuffersMidRunKeepsUnsentFramesInOrder) {
+  TxQueue q(16, milliseconds(1), milliseconds(32));
+  for (std::uint16_t i = 0; i < 10; ++i) q.push(numbered(i));
+  FakeBatchWriter w;
+  w.script.push_back({4, WriteResult::Written});
+  w.script.push_back({0, WriteResult::NoBuffers});
+  EXPECT_EQ(q.flush_batch(w, 64), FlushResult::NoBuffers);
+  EXPECT_EQ(q.size(), 6U);
+  EXPECT_EQ(q.retry_delay(), milliseconds(1));
+  EXPECT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
+  EXPECT_EQ(w.accepted, range(0, 10)) << "nothing lost, nothing reordered";
+  EXPECT_EQ(q.dropped(), 0U);
+}
+
+TEST(TxQueueBatch, FailedDropsOnlyTheFrameThatFailed) {
+  TxQueue q(16);
+  for (std::uint16_t i = 0; i < 5; ++i) q.push(numbered(i));
+  FakeBatchWriter w;
+  w.script.push_back({2, WriteResult::Failed});  // frame 2 can never be sent
+  EXPECT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
+  EXPECT_EQ(w.accepted, (std::vector<std::uint16_t>{0, 1, 3, 4}));
+  EXPECT_EQ(q.failed(), 1U);
+}
+
+TEST(TxQueueBatch, WriterTakingNothingWithoutErrorIsTreatedAsBlocked) {
+  TxQueue q(4);
+  q.push(numbered(0));
+  FakeBatchWriter w;
+  w.script.push_back({0, WriteResult::Written});
+  EXPECT_EQ(q.flush_batch(w, 64), FlushResult::WouldBlock);
+  EXPECT_EQ(q.size(), 1U);
+}
+
+TEST(TxQueueBatch, LinkDownStopsWithFramesKept) {
+  TxQueue q(4);
+  q.push(numbered(0));
+  q.push(numbered(1));
+  FakeBatchWriter w;
+  w.script.push_back({0, WriteResult::LinkDown});
+  EXPECT_EQ(q.flush_batch(w, 64), FlushResult::LinkDown);
+  EXPECT_EQ(q.size(), 2U);
 }
 
 }  // namespace

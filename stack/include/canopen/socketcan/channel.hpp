@@ -111,6 +111,11 @@ class SocketCanChannel final : public can::Channel, public std::enable_shared_fr
   std::vector<mmsghdr> rx_msgs_;
   std::vector<char> rx_control_;
   std::vector<can::Frame> rx_batch_;
+  // sendmmsg() buffers.
+  static constexpr std::size_t kTxBatch = 64;
+  std::vector<canfd_frame> tx_raw_;
+  std::vector<iovec> tx_iov_;
+  std::vector<mmsghdr> tx_msgs_;
 };
 
 }  // namespace canopen::socketcan

@@ -1,0 +1,143 @@
+// EDS/DCF reader (CiA 306 device description files, INI format): turns an
+// Electronic Data Sheet or a Device Configuration File into an object
+// dictionary plus the file's device information.
+//
+// What is read: [FileInfo], [DeviceInfo], [DeviceComissioning] (DCF),
+// [DummyUsage], [Comments], the object lists ([MandatoryObjects],
+// [OptionalObjects], [ManufacturerObjects]), object sections [1018],
+// sub-object sections [1018sub2], CompactSubObj with [xxxxName] and
+// [xxxxValue], and [xxxxObjectLinks]. Section and key names are
+// case-insensitive; numbers are decimal, 0x hex or leading-0 octal; integer
+// values may use $NODEID ("$NODEID+0x180", "0x180+$NODEID", "$NODEID").
+//
+// Harmless oddities of real vendor files (unknown sections or keys, a key
+// repeated with the same value, an object section not in any object list,
+// hex beyond a signed type's range read as two's complement, ...) are
+// accepted and reported in DeviceDescription::warnings. Anything ambiguous
+// (a key repeated with another value, a value that does not fit its type,
+// an unknown DataType or AccessType, a listed object without a section,
+// SubNumber disagreeing with the sub-object sections, a default outside its
+// limits, a malformed line, ...) throws EdsError naming the file and line.
+//
+// Callers: pass the node-ID the device has on the bus whenever the file may
+// use $NODEID (every EDS with default PDO/SDO/EMCY COB-IDs does); catch
+// EdsError and show what() to the operator; log the warnings.
+//
+// Thread safety: the functions are pure (no shared state) and may run
+// concurrently; a DeviceDescription is a plain value (its dictionary is not
+// thread-safe, see object_dictionary.hpp).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "canopen/od/object_dictionary.hpp"
+
+namespace canopen::eds {
+
+// A file that cannot be used as given. what() is "file:line: reason", or
+// "file: reason" when the problem is not on one line (line() == 0, e.g. the
+// file cannot be read).
+class EdsError : public std::runtime_error {
+ public:
+  EdsError(std::string file, std::size_t line, std::string reason);
+  const std::string& file() const noexcept { return file_; }
+  std::size_t line() const noexcept { return line_; }  // 1-based; 0 = whole file
+  const std::string& reason() const noexcept { return reason_; }
+
+ private:
+  std::string file_;
+  std::size_t line_;
+  std::string reason_;
+};
+
+// [FileInfo]: informative only, kept as written.
+struct FileInfo {
+  std::string file_name;
+  std::string file_version;   // FileVersion
+  std::string file_revision;  // FileRevision
+  std::string eds_version;    // EDSVersion, e.g. "4.0"
+  std::string description;
+  std::string creation_time, creation_date, created_by;
+  std::string modification_time, modification_date, modified_by;
+  std::string last_eds;  // LastEDS (DCF): the EDS the DCF was made from
+};
+
+// [DeviceInfo]. Numbers absent from the file stay nullopt / 0 / false.
+struct DeviceInfo {
+  std::string vendor_name;
+  std::optional<std::uint32_t> vendor_number;
+  std::string product_name;
+  std::optional<std::uint32_t> product_number;
+  std::optional<std::uint32_t> revision_number;
+  std::string order_code;
+  std::vector<unsigned> baud_rates_kbit;  // BaudRate_xxx=1, ascending (10 ... 1000)
+  bool simple_boot_up_master = false;
+  bool simple_boot_up_slave = false;
+  std::uint8_t granularity = 0;  // 0: no dynamic PDO mapping; else mapping granularity in bits
+  std::uint8_t dynamic_channels_supported = 0;
+  bool group_messaging = false;
+  std::uint16_t nr_of_rx_pdo = 0;
+  std::uint16_t nr_of_tx_pdo = 0;
+  bool lss_supported = false;
+  std::uint8_t compact_pdo = 0;  // CompactPDO bit field
+  bool canopen_safety_supported = false;
+};
+
+// [DeviceComissioning] (CiA 306 spells it with one 'm'): DCF only.
+struct Commissioning {
+  std::optional<std::uint8_t> node_id;  // 1..127
+  std::string node_name;
+  std::optional<std::uint16_t> baud_rate_kbit;
+  std::optional<std::uint32_t> net_number;
+  std::string network_name;
+  bool canopen_manager = false;
+  std::optional<std::uint32_t> lss_serial_number;
+};
+
+struct DeviceDescription {
+  FileInfo file;
+  DeviceInfo device;
+  // Every VAR, DOMAIN, ARRAY and RECORD object of the file (DEFTYPE,
+  // DEFSTRUCT and NULL objects are skipped with a warning), without hooks.
+  // Per sub-entry: default_value is DefaultValue (nullopt if absent, or if
+  // it needs an unknown $NODEID while ParameterValue makes it unnecessary);
+  // value is the [xxxxValue] entry, else ParameterValue, else DefaultValue,
+  // else the type's zero. DOMAIN objects default to DataType DOMAIN and rw.
+  // CompactSubObj=N gives sub 0 "Highest sub-index supported" (UNSIGNED8,
+  // ro, N) and subs 1..N with the object's DataType, AccessType, PDOMapping,
+  // limits and DefaultValue, named from [xxxxName] or else ParameterName
+  // followed by the sub-index in decimal ("Gain1").
+  od::ObjectDictionary od;
+  bool is_dcf = false;  // a [DeviceComissioning] section or a .dcf file name
+  // The node-ID $NODEID was resolved with: the caller's, else the DCF's.
+  std::optional<std::uint8_t> node_id;
+  std::optional<Commissioning> commissioning;
+  std::vector<std::uint16_t> mandatory_objects;  // as listed, duplicates removed
+  std::vector<std::uint16_t> optional_objects;
+  std::vector<std::uint16_t> manufacturer_objects;
+  std::vector<std::uint16_t> dummy_usage;                            // data type indexes with DummyXXXX=1, ascending
+  std::vector<std::string> comments;                                 // [Comments] Line1..LineN
+  std::map<std::uint16_t, std::vector<std::uint16_t>> object_links;  // [xxxxObjectLinks]
+  std::vector<std::string> warnings;                                 // harmless oddities, each "file:line: text"
+};
+
+// Reads and parses a file; file names in messages are path.string().
+// node_id (1..127) resolves $NODEID and overrides a DCF's NodeID (with a
+// warning when they differ). Throws EdsError (also when the file cannot be
+// read or node_id is out of range).
+DeviceDescription load_device_description(const std::filesystem::path& path, std::optional<std::uint8_t> node_id = {});
+
+// The same on text already in memory; file_name is used in messages only
+// (and a ".dcf" ending marks a DCF).
+DeviceDescription parse_device_description(std::string_view text, std::string file_name,
+                                           std::optional<std::uint8_t> node_id = {});
+
+}  // namespace canopen::eds

@@ -1,0 +1,930 @@
+// CiA 306 semantics on top of the INI layer (ini.hpp): metadata sections,
+// object lists, object and sub-object sections, CompactSubObj, $NODEID.
+#include "canopen/eds/eds.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <span>
+#include <sstream>
+
+#include "ini.hpp"
+
+namespace canopen::eds {
+
+using detail::Diagnostics;
+using detail::IniEntry;
+using detail::IniFile;
+using detail::IniSection;
+using detail::to_lower;
+using detail::trim;
+
+namespace {
+
+std::string hex4(std::uint32_t v) {
+  static constexpr std::array<char, 16> digits = {'0', '1', '2', '3', '4', '5', '6', '7',
+                                                  '8', '9', 'A', 'B', 'C', 'D', 'E', 'F'};
+  std::string s = "0000";
+  for (int i = 3; i >= 0; --i) {
+    s[static_cast<std::size_t>(i)] = digits[v & 0xF];
+    v >>= 4;
+  }
+  return s;
+}
+
+bool is_hex_digit(char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; }
+bool all_hex(std::string_view s) { return !s.empty() && std::all_of(s.begin(), s.end(), is_hex_digit); }
+bool all_dec(std::string_view s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
+}
+std::uint32_t hex_value(std::string_view s) {  // precondition: all_hex, at most 8 digits
+  std::uint32_t v = 0;
+  for (char c : s) {
+    const auto lc = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    v = v * 16 + static_cast<std::uint32_t>(lc <= '9' ? lc - '0' : lc - 'a' + 10);
+  }
+  return v;
+}
+
+bool is_integer(DataType t) { return is_signed_integer(t) || is_unsigned_integer(t); }
+bool is_numeric(DataType t) { return is_integer(t) || is_real(t) || t == DataType::Boolean; }
+// Types for which an empty DefaultValue / ParameterValue means "empty", not "absent".
+bool empty_is_a_value(DataType t) {
+  return t == DataType::VisibleString || t == DataType::OctetString || t == DataType::UnicodeString ||
+         t == DataType::Domain;
+}
+
+std::string type_text(DataType t) { return std::string(standard_name(t)); }
+
+std::string subject(const IniSection& s) { return "[" + s.name + "]"; }
+
+std::string invalid(const std::string& label, const std::string& text, DataType type, const std::string& detail) {
+  return label + " '" + text + "' is not a valid " + type_text(type) + (detail.empty() ? "" : ": " + detail);
+}
+
+// ---------------------------------------------------------------------------
+// Section kinds derived from the name.
+
+enum class ObjKind { Object, Sub, Name, Value, Denotation, ObjectLinks };
+struct ObjRef {
+  ObjKind kind = ObjKind::Object;
+  std::uint16_t index = 0;
+  std::uint8_t sub = 0;
+};
+
+// Leading zeros do not count ("[01000]" is 1000h).
+std::string_view significant_digits(std::string_view hex) {
+  return hex.substr(std::min(hex.find_first_not_of('0'), hex.size()));
+}
+
+std::uint16_t object_index(std::string_view hex, const IniSection& s, const Diagnostics& d) {
+  hex = significant_digits(hex);
+  if (hex.size() > 4) d.fail(s.line, "section " + subject(s) + ": index above 0xFFFF");
+  const auto index = static_cast<std::uint16_t>(hex_value(hex));
+  if (index == 0) d.fail(s.line, "section " + subject(s) + ": index 0 is not an object");
+  return index;
+}
+
+// nullopt: not an object-related section name.
+std::optional<ObjRef> classify(const IniSection& s, const Diagnostics& d) {
+  const std::string_view n = s.lname;
+  static constexpr std::array<std::pair<std::string_view, ObjKind>, 4> suffixes = {{
+      {"objectlinks", ObjKind::ObjectLinks},
+      {"denotation", ObjKind::Denotation},
+      {"value", ObjKind::Value},
+      {"name", ObjKind::Name},
+  }};
+  for (const auto& [suffix, kind] : suffixes) {
+    if (n.size() > suffix.size() && n.ends_with(suffix)) {
+      const auto prefix = n.substr(0, n.size() - suffix.size());
+      if (all_hex(prefix)) return ObjRef{kind, object_index(prefix, s, d), 0};
+    }
+  }
+  if (const auto pos = n.find("sub"); pos != std::string_view::npos && pos > 0 && all_hex(n.substr(0, pos))) {
+    const auto index = object_index(n.substr(0, pos), s, d);
+    const auto sub = n.substr(pos + 3);
+    if (!all_hex(sub)) d.fail(s.line, "malformed sub-object section name " + subject(s));
+    const auto digits = significant_digits(sub);
+    if (digits.size() > 2 || hex_value(digits) > 0xFE)
+      d.fail(s.line, "section " + subject(s) + ": sub-index above 0xFE");
+    return ObjRef{ObjKind::Sub, index, static_cast<std::uint8_t>(hex_value(digits))};
+  }
+  if (all_hex(n)) return ObjRef{ObjKind::Object, object_index(n, s, d), 0};
+  return std::nullopt;
+}
+
+struct ObjSections {
+  const IniSection* main = nullptr;
+  std::map<std::uint8_t, const IniSection*> subs;
+  const IniSection* names = nullptr;
+  const IniSection* values = nullptr;
+  const IniSection* links = nullptr;
+};
+
+// One value-bearing key (DefaultValue, ParameterValue, LowLimit, ...).
+struct Parsed {
+  std::optional<Value> value;
+  const IniEntry* entry = nullptr;
+  std::string label;           // how messages name it: the key, or "[xxxxValue] entry n"
+  bool needs_node_id = false;  // uses $NODEID and no node-ID is known
+};
+
+// What a section says about one sub-entry (or about all of a compact object's).
+struct Template {
+  std::string name;
+  DataType type = DataType::Unsigned8;
+  od::Access access = od::Access::ReadOnly;
+  bool pdo_mappable = false;
+  std::optional<Value> low, high;
+  Parsed def, param;
+};
+
+constexpr std::array<std::string_view, 15> kObjectKeys = {
+    "parametername", "objecttype",     "datatype",   "accesstype", "defaultvalue",
+    "pdomapping",    "subnumber",      "lowlimit",   "highlimit",  "objflags",
+    "compactsubobj", "parametervalue", "denotation", "uploadfile", "downloadfile"};
+constexpr std::array<std::string_view, 13> kSubKeys = {
+    "parametername", "objecttype", "datatype",       "accesstype", "defaultvalue", "pdomapping",  "lowlimit",
+    "highlimit",     "objflags",   "parametervalue", "denotation", "uploadfile",   "downloadfile"};
+
+// ---------------------------------------------------------------------------
+
+class Builder {
+ public:
+  Builder(Diagnostics& diag, const IniFile& ini, const std::string& file_name, std::optional<std::uint8_t> node_id)
+      : d_(diag), ini_(ini), node_id_arg_(node_id) {
+    const auto lname = to_lower(file_name);
+    out_.is_dcf = lname.ends_with(".dcf");
+  }
+
+  DeviceDescription run();
+
+ private:
+  // -- values --
+  std::uint64_t number(const IniEntry& e, DataType t) const;
+  bool flag(const IniEntry& e) const;
+  Parsed parse_object_value(const IniEntry* e, DataType type, std::string label = {});
+  Value resolve_node_id(const IniEntry& e, const std::string& label, DataType type) const;
+
+  // -- sections --
+  void warn_unknown_keys(const IniSection& s, std::span<const std::string_view> known);
+  void read_file_info(const IniSection& s);
+  void read_device_info(const IniSection& s);
+  void read_commissioning(const IniSection& s);
+  void read_dummy_usage(const IniSection& s);
+  void read_comments(const IniSection& s);
+  std::vector<std::uint16_t> read_list(const IniSection& s);
+
+  // -- objects --
+  void collect_object_sections();
+  void build_object(std::uint16_t index, const ObjSections& secs);
+  Template read_template(const IniSection& s, bool domain_defaults);
+  od::SubEntry finish(const Template& t, std::uint8_t sub, const Parsed* override_value);
+  void check_in_limits(const Template& t, const Parsed& p) const;
+  // [xxxxName] / [xxxxValue]: numbered entries 1..count.
+  std::map<std::uint8_t, const IniEntry*> numbered(const IniSection& s, std::uint8_t count);
+
+  Diagnostics& d_;
+  const IniFile& ini_;
+  std::optional<std::uint8_t> node_id_arg_;
+  DeviceDescription out_;
+  std::map<std::uint16_t, ObjSections> objs_;
+  std::map<std::uint16_t, std::size_t> listed_;  // index -> line of its first list entry
+  bool warned_param_in_eds_ = false;
+};
+
+std::uint64_t Builder::number(const IniEntry& e, DataType t) const {
+  auto r = parse_value(t, e.value);
+  if (!r) d_.fail(e.line, invalid(e.key, e.value, t, r.error().detail));
+  if (t == DataType::Boolean) return std::get<bool>(r->data) ? 1 : 0;
+  return std::get<std::uint64_t>(r->data);
+}
+
+bool Builder::flag(const IniEntry& e) const {
+  auto r = parse_value(DataType::Boolean, e.value);
+  if (!r) d_.fail(e.line, e.key + "=" + e.value + ": expected 0 or 1");
+  return std::get<bool>(r->data);
+}
+
+// "$NODEID", "$NODEID+0x180", "0x180+$NODEID" (CiA 306): a sum with exactly
+// one $NODEID term, checked against the type's range.
+Value Builder::resolve_node_id(const IniEntry& e, const std::string& label, DataType type) const {
+  std::uint64_t sum = 0;
+  int node_terms = 0;
+  std::string_view rest = e.value;
+  while (true) {
+    const auto plus = rest.find('+');
+    const auto term = trim(rest.substr(0, plus));
+    std::uint64_t v = 0;
+    if (to_lower(term) == "$nodeid") {
+      ++node_terms;
+      v = *out_.node_id;
+    } else {
+      if (term.empty() || term.find('$') != std::string_view::npos) {
+        d_.fail(e.line, label + " '" + e.value + "': malformed $NODEID expression (expected $NODEID+number)");
+      }
+      auto r = parse_value(DataType::Unsigned64, term);
+      if (!r) d_.fail(e.line, label + " '" + e.value + "': " + r.error().detail);
+      v = std::get<std::uint64_t>(r->data);
+    }
+    if (v > std::numeric_limits<std::uint64_t>::max() - sum) d_.fail(e.line, label + " '" + e.value + "' overflows");
+    sum += v;
+    if (plus == std::string_view::npos) break;
+    rest.remove_prefix(plus + 1);
+  }
+  if (node_terms != 1) d_.fail(e.line, label + " '" + e.value + "': malformed $NODEID expression (one $NODEID term)");
+  auto r = parse_value(type, std::to_string(sum));
+  if (!r) {
+    d_.fail(e.line, label + " '" + e.value + "' with node-ID " + std::to_string(*out_.node_id) + " is not a valid " +
+                        type_text(type) + ": " + r.error().detail);
+  }
+  return std::move(r).value();
+}
+
+Parsed Builder::parse_object_value(const IniEntry* e, DataType type, std::string label) {
+  Parsed p;
+  p.entry = e;
+  if (e == nullptr) return p;
+  p.label = label.empty() ? e->key : std::move(label);
+  if (e->value.empty()) {
+    if (empty_is_a_value(type)) {
+      p.value = Value::zero(type);
+    } else {
+      p.entry = nullptr;  // an empty optional key is an absent one
+    }
+    return p;
+  }
+  // In a string '$' is text; in a number it can only be $NODEID.
+  if (e->value.find('$') != std::string::npos && !empty_is_a_value(type)) {
+    if (!is_integer(type)) {
+      d_.fail(e->line, p.label + " '" + e->value + "': $NODEID in a value of type " + type_text(type));
+    }
+    if (!out_.node_id) {
+      p.needs_node_id = true;
+      return p;
+    }
+    p.value = resolve_node_id(*e, p.label, type);
+    return p;
+  }
+  auto r = parse_value(type, e->value);
+  if (r) {
+    p.value = std::move(r).value();
+    return p;
+  }
+  // Vendor files often write a signed type's bit pattern in hex
+  // (LowLimit=0x80000000 for INTEGER32): unambiguous, so read it as two's
+  // complement when it fits the type's width.
+  const auto lower = to_lower(e->value);
+  if (is_signed_integer(type) && r.code() == make_error_code(SdoAbort::ValueTooHigh) && lower.starts_with("0x")) {
+    if (auto u = parse_value(DataType::Unsigned64, e->value)) {
+      const auto bits = std::get<std::uint64_t>(u->data);
+      const auto smax = static_cast<std::uint64_t>(signed_max(type));
+      const std::uint64_t umax = smax * 2 + 1;
+      if (bits <= umax) {
+        const auto v = static_cast<std::int64_t>(bits - smax - 1) + signed_min(type);
+        p.value = Value::of_signed(type, v);
+        d_.warn(e->line, p.label + " '" + e->value + "' read as two's complement " + std::to_string(v) + " (" +
+                             type_text(type) + ")");
+        return p;
+      }
+    }
+  }
+  d_.fail(e->line, invalid(p.label, e->value, type, r.error().detail));
+}
+
+void Builder::warn_unknown_keys(const IniSection& s, std::span<const std::string_view> known) {
+  for (const auto& e : s.entries) {
+    if (std::find(known.begin(), known.end(), e.lkey) == known.end()) {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Metadata sections.
+
+void Builder::read_file_info(const IniSection& s) {
+  const std::array<std::pair<std::string_view, std::string*>, 12> keys = {{
+      {"filename", &out_.file.file_name},
+      {"fileversion", &out_.file.file_version},
+      {"filerevision", &out_.file.file_revision},
+      {"edsversion", &out_.file.eds_version},
+      {"description", &out_.file.description},
+      {"creationtime", &out_.file.creation_time},
+      {"creationdate", &out_.file.creation_date},
+      {"createdby", &out_.file.created_by},
+      {"modificationtime", &out_.file.modification_time},
+      {"modificationdate", &out_.file.modification_date},
+      {"modifiedby", &out_.file.modified_by},
+      {"lasteds", &out_.file.last_eds},
+  }};
+  for (const auto& e : s.entries) {
+    const auto it = std::find_if(keys.begin(), keys.end(), [&](const auto& k) { return k.first == e.lkey; });
+    if (it == keys.end()) {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+    } else {
+      *it->second = e.value;
+    }
+  }
+}
+
+void Builder::read_device_info(const IniSection& s) {
+  auto& dev = out_.device;
+  static constexpr std::array<unsigned, 8> rates = {10, 20, 50, 125, 250, 500, 800, 1000};
+  for (const auto& e : s.entries) {
+    const auto& k = e.lkey;
+    if (k == "vendorname") {
+      dev.vendor_name = e.value;
+    } else if (k == "productname") {
+      dev.product_name = e.value;
+    } else if (k == "ordercode") {
+      dev.order_code = e.value;
+    } else if (e.value.empty()) {
+      continue;  // numbers and flags are optional
+    } else if (k == "vendornumber") {
+      dev.vendor_number = static_cast<std::uint32_t>(number(e, DataType::Unsigned32));
+    } else if (k == "productnumber") {
+      dev.product_number = static_cast<std::uint32_t>(number(e, DataType::Unsigned32));
+    } else if (k == "revisionnumber") {
+      dev.revision_number = static_cast<std::uint32_t>(number(e, DataType::Unsigned32));
+    } else if (k.starts_with("baudrate_")) {
+      const auto rate = std::string_view(k).substr(9);
+      const auto it = std::find_if(rates.begin(), rates.end(), [&](unsigned r) { return std::to_string(r) == rate; });
+      if (it == rates.end()) {
+        d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+      } else if (flag(e)) {
+        dev.baud_rates_kbit.push_back(*it);
+      }
+    } else if (k == "simplebootupmaster") {
+      dev.simple_boot_up_master = flag(e);
+    } else if (k == "simplebootupslave") {
+      dev.simple_boot_up_slave = flag(e);
+    } else if (k == "granularity") {
+      dev.granularity = static_cast<std::uint8_t>(number(e, DataType::Unsigned8));
+      if (dev.granularity > 64) d_.fail(e.line, "Granularity " + e.value + " is above 64");
+    } else if (k == "dynamicchannelssupported") {
+      dev.dynamic_channels_supported = static_cast<std::uint8_t>(number(e, DataType::Unsigned8));
+    } else if (k == "groupmessaging") {
+      dev.group_messaging = flag(e);
+    } else if (k == "nrofrxpdo") {
+      dev.nr_of_rx_pdo = static_cast<std::uint16_t>(number(e, DataType::Unsigned16));
+    } else if (k == "nroftxpdo") {
+      dev.nr_of_tx_pdo = static_cast<std::uint16_t>(number(e, DataType::Unsigned16));
+    } else if (k == "lss_supported") {
+      dev.lss_supported = flag(e);
+    } else if (k == "compactpdo") {
+      dev.compact_pdo = static_cast<std::uint8_t>(number(e, DataType::Unsigned8));
+    } else if (k == "canopensafetysupported") {
+      dev.canopen_safety_supported = flag(e);
+    } else {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+    }
+  }
+  std::sort(dev.baud_rates_kbit.begin(), dev.baud_rates_kbit.end());
+}
+
+void Builder::read_commissioning(const IniSection& s) {
+  Commissioning c;
+  for (const auto& e : s.entries) {
+    const auto& k = e.lkey;
+    if (k == "nodename") {
+      c.node_name = e.value;
+    } else if (k == "networkname") {
+      c.network_name = e.value;
+    } else if (e.value.empty()) {
+      continue;
+    } else if (k == "nodeid") {
+      const auto id = number(e, DataType::Unsigned8);
+      if (id < 1 || id > 127) d_.fail(e.line, "NodeID " + e.value + " is outside 1..127");
+      c.node_id = static_cast<std::uint8_t>(id);
+    } else if (k == "baudrate") {
+      c.baud_rate_kbit = static_cast<std::uint16_t>(number(e, DataType::Unsigned16));
+    } else if (k == "netnumber") {
+      c.net_number = static_cast<std::uint32_t>(number(e, DataType::Unsigned32));
+    } else if (k == "canopenmanager") {
+      c.canopen_manager = flag(e);
+    } else if (k == "lss_serialnumber") {
+      c.lss_serial_number = static_cast<std::uint32_t>(number(e, DataType::Unsigned32));
+    } else {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+    }
+  }
+  out_.commissioning = c;
+}
+
+void Builder::read_dummy_usage(const IniSection& s) {
+  std::set<std::uint16_t> used;
+  for (const auto& e : s.entries) {
+    const std::string_view k = e.lkey;
+    if (!k.starts_with("dummy") || !all_hex(k.substr(5)) || k.size() > 9) {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+      continue;
+    }
+    if (e.value.empty()) continue;
+    if (flag(e)) used.insert(static_cast<std::uint16_t>(hex_value(k.substr(5))));
+  }
+  out_.dummy_usage.assign(used.begin(), used.end());
+}
+
+void Builder::read_comments(const IniSection& s) {
+  std::map<std::uint64_t, std::string> lines;
+  const IniEntry* count = nullptr;
+  for (const auto& e : s.entries) {
+    const std::string_view k = e.lkey;
+    if (k == "lines") {
+      count = &e;
+    } else if (k.starts_with("line") && all_dec(k.substr(4)) && k.size() < 10) {
+      lines[std::stoull(std::string(k.substr(4)))] = e.value;
+    } else {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+    }
+  }
+  if (count != nullptr && !count->value.empty() && number(*count, DataType::Unsigned16) != lines.size()) {
+    d_.warn(count->line, "Lines=" + count->value + " but " + std::to_string(lines.size()) + " comment lines follow");
+  }
+  for (auto& [n, text] : lines) out_.comments.push_back(std::move(text));
+}
+
+std::vector<std::uint16_t> Builder::read_list(const IniSection& s) {
+  const IniEntry* count = nullptr;
+  std::map<std::uint64_t, const IniEntry*> entries;  // entry number -> entry
+  for (const auto& e : s.entries) {
+    if (e.lkey == "supportedobjects") {
+      count = &e;
+    } else if (all_dec(e.lkey) && e.lkey.size() < 6) {
+      entries[std::stoull(e.lkey)] = &e;
+    } else {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+    }
+  }
+  if (count == nullptr || count->value.empty()) {
+    d_.warn(s.line, subject(s) + " has no SupportedObjects; using its " + std::to_string(entries.size()) + " entries");
+  } else {
+    const auto n = number(*count, DataType::Unsigned16);
+    for (const auto& [k, e] : entries) {
+      if (k == 0 || k > n) d_.fail(e->line, "entry " + e->key + " is outside SupportedObjects=" + count->value);
+    }
+    for (std::uint64_t k = 1; k <= n; ++k) {
+      if (!entries.contains(k)) {
+        d_.fail(count->line, "SupportedObjects=" + count->value + " but entry " + std::to_string(k) + " is missing");
+      }
+    }
+  }
+  std::vector<std::uint16_t> list;
+  for (const auto& [k, e] : entries) {
+    const auto index = static_cast<std::uint16_t>(number(*e, DataType::Unsigned16));
+    if (index == 0) d_.fail(e->line, "index 0 is not an object");
+    if (const auto it = listed_.find(index); it != listed_.end()) {
+      d_.warn(e->line, "object 0x" + hex4(index) + " listed again (first at line " + std::to_string(it->second) + ")");
+      continue;
+    }
+    listed_.emplace(index, e->line);
+    if (!objs_.contains(index) || objs_.at(index).main == nullptr) {
+      d_.fail(e->line,
+              "object 0x" + hex4(index) + " is listed in " + subject(s) + " but has no [" + hex4(index) + "] section");
+    }
+    list.push_back(index);
+  }
+  return list;
+}
+
+// ---------------------------------------------------------------------------
+// Objects.
+
+void Builder::collect_object_sections() {
+  std::map<std::pair<std::uint16_t, int>, const IniSection*> seen;  // (index, sub or -kind) -> section
+  for (const auto& s : ini_.sections) {
+    const auto ref = classify(s, d_);
+    if (!ref) continue;
+    const int slot = ref->kind == ObjKind::Sub ? ref->sub : -1 - static_cast<int>(ref->kind);
+    if (const auto [it, fresh] = seen.emplace(std::pair{ref->index, slot}, &s); !fresh) {
+      d_.fail(s.line, "section " + subject(s) + " describes the same thing as " + subject(*it->second) + " (line " +
+                          std::to_string(it->second->line) + ")");
+    }
+    auto& o = objs_[ref->index];
+    switch (ref->kind) {
+      case ObjKind::Object:
+        o.main = &s;
+        break;
+      case ObjKind::Sub:
+        o.subs[ref->sub] = &s;
+        break;
+      case ObjKind::Name:
+        o.names = &s;
+        break;
+      case ObjKind::Value:
+        o.values = &s;
+        break;
+      case ObjKind::ObjectLinks:
+        o.links = &s;
+        break;
+      case ObjKind::Denotation:
+        break;  // DCF names for the user's tools; nothing to use here
+    }
+  }
+  for (const auto& [index, o] : objs_) {
+    if (o.main != nullptr) continue;
+    if (!o.subs.empty()) {
+      const auto* sub = o.subs.begin()->second;
+      d_.fail(sub->line, "sub-object section " + subject(*sub) + " has no object section [" + hex4(index) + "]");
+    }
+    for (const auto* s : {o.names, o.values, o.links}) {
+      if (s != nullptr) d_.warn(s->line, "section " + subject(*s) + " has no object section; ignored");
+    }
+  }
+}
+
+std::map<std::uint8_t, const IniEntry*> Builder::numbered(const IniSection& s, std::uint8_t count) {
+  std::map<std::uint8_t, const IniEntry*> out;
+  const IniEntry* declared = nullptr;
+  for (const auto& e : s.entries) {
+    if (e.lkey == "nrofentries") {
+      declared = &e;
+      continue;
+    }
+    if (!all_dec(e.lkey)) {
+      d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
+      continue;
+    }
+    if (e.lkey.size() > 3 || std::stoul(e.lkey) == 0 || std::stoul(e.lkey) > count) {
+      d_.fail(e.line, subject(s) + ": sub-index " + e.key + " is outside 1..CompactSubObj=" + std::to_string(count));
+    }
+    out[static_cast<std::uint8_t>(std::stoul(e.lkey))] = &e;
+  }
+  if (declared != nullptr && !declared->value.empty() && number(*declared, DataType::Unsigned8) != out.size()) {
+    d_.fail(declared->line, "NrOfEntries=" + declared->value + " but " + subject(s) + " has " +
+                                std::to_string(out.size()) + " entries");
+  }
+  return out;
+}
+
+void Builder::check_in_limits(const Template& t, const Parsed& p) const {
+  if (!p.value || (!t.low && !t.high)) return;
+  std::string detail;
+  if (check_limits(*p.value, t.low, t.high, &detail)) {
+    d_.fail(p.entry->line, p.label + " " + format_value(*p.value) + " is outside LowLimit/HighLimit: " + detail);
+  }
+}
+
+Template Builder::read_template(const IniSection& s, bool domain_defaults) {
+  Template t;
+  const auto* name = s.find("parametername");
+  if (name == nullptr || name->value.empty()) {
+    d_.warn(s.line, subject(s) + " has no ParameterName");
+  } else {
+    t.name = name->value;
+  }
+
+  const auto* type = s.find("datatype");
+  if (type != nullptr && !type->value.empty()) {
+    const auto code = static_cast<std::uint16_t>(number(*type, DataType::Unsigned16));
+    const auto dt = data_type_from_index(code);
+    if (!dt) d_.fail(type->line, "unknown DataType 0x" + hex4(code) + " in " + subject(s));
+    t.type = *dt;
+  } else if (domain_defaults) {
+    t.type = DataType::Domain;
+  } else {
+    d_.fail(s.line, subject(s) + " has no DataType");
+  }
+
+  const auto* access = s.find("accesstype");
+  if (access != nullptr && !access->value.empty()) {
+    const auto a = od::parse_access(access->value);
+    if (!a) {
+      d_.fail(access->line, "unknown AccessType '" + access->value + "' in " + subject(s) +
+                                " (expected ro, wo, rw, rwr, rww or const)");
+    }
+    t.access = *a;
+  } else if (domain_defaults) {
+    t.access = od::Access::ReadWrite;
+  } else {
+    d_.fail(s.line, subject(s) + " has no AccessType");
+  }
+
+  if (const auto* pdo = s.find("pdomapping"); pdo != nullptr && !pdo->value.empty()) t.pdo_mappable = flag(*pdo);
+
+  Parsed low, high;
+  for (auto [key, p] : {std::pair{"lowlimit", &low}, std::pair{"highlimit", &high}}) {
+    const auto* e = s.find(key);
+    if (e == nullptr || e->value.empty()) continue;
+    if (!is_numeric(t.type)) {
+      d_.warn(e->line, e->key + " ignored: " + type_text(t.type) + " has no limits");
+      continue;
+    }
+    *p = parse_object_value(e, t.type);
+    if (p->needs_node_id) {
+      d_.fail(e->line, e->key + " '" + e->value +
+                           "' uses $NODEID but no node-ID is known (pass one, or use a DCF with "
+                           "[DeviceComissioning] NodeID)");
+    }
+  }
+  t.low = low.value;
+  t.high = high.value;
+  if (t.low && t.high && check_limits(*t.low, std::nullopt, t.high)) {
+    d_.fail(low.entry->line,
+            "LowLimit " + format_value(*t.low) + " is above HighLimit " + format_value(*t.high) + " in " + subject(s));
+  }
+
+  t.def = parse_object_value(s.find("defaultvalue"), t.type);
+  t.param = parse_object_value(s.find("parametervalue"), t.type);
+  check_in_limits(t, t.def);
+  check_in_limits(t, t.param);
+  if (t.param.entry != nullptr && !out_.is_dcf && !warned_param_in_eds_) {
+    warned_param_in_eds_ = true;
+    d_.warn(t.param.entry->line, "ParameterValue in a file that is not a DCF; used as the current value");
+  }
+  return t;
+}
+
+od::SubEntry Builder::finish(const Template& t, std::uint8_t sub, const Parsed* override_value) {
+  od::SubEntry e;
+  e.sub = sub;
+  e.name = t.name;
+  e.type = t.type;
+  e.access = t.access;
+  e.pdo_mappable = t.pdo_mappable;
+  e.low = t.low;
+  e.high = t.high;
+  e.default_value = t.def.value;
+  // The most specific value wins: [xxxxValue] entry, ParameterValue, DefaultValue.
+  const Parsed* chosen = nullptr;
+  for (const Parsed* p : {override_value, &t.param, &t.def}) {
+    if (p != nullptr && p->entry != nullptr) {
+      chosen = p;
+      break;
+    }
+  }
+  if (chosen == nullptr) {
+    e.value = Value::zero(t.type);
+  } else if (chosen->needs_node_id) {
+    d_.fail(chosen->entry->line, chosen->label + " '" + chosen->entry->value +
+                                     "' uses $NODEID but no node-ID is known (pass one, or use a DCF with "
+                                     "[DeviceComissioning] NodeID)");
+  } else {
+    e.value = *chosen->value;
+  }
+  return e;
+}
+
+void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
+  const IniSection& s = *secs.main;
+  warn_unknown_keys(s, kObjectKeys);
+
+  od::ObjectCode code = od::ObjectCode::Var;
+  if (const auto* ot = s.find("objecttype"); ot != nullptr && !ot->value.empty()) {
+    switch (number(*ot, DataType::Unsigned8)) {
+      case 0x2:
+        code = od::ObjectCode::Domain;
+        break;
+      case 0x7:
+        code = od::ObjectCode::Var;
+        break;
+      case 0x8:
+        code = od::ObjectCode::Array;
+        break;
+      case 0x9:
+        code = od::ObjectCode::Record;
+        break;
+      case 0x0:
+      case 0x5:
+      case 0x6:
+        d_.warn(ot->line, "ObjectType " + ot->value + " (NULL/DEFTYPE/DEFSTRUCT) of " + subject(s) +
+                              " is not used; object skipped");
+        return;
+      default:
+        d_.fail(ot->line, "unknown ObjectType " + ot->value + " in " + subject(s) +
+                              " (expected 0x2 DOMAIN, 0x7 VAR, 0x8 ARRAY or 0x9 RECORD)");
+    }
+  }
+
+  const auto* compact_e = s.find("compactsubobj");
+  std::uint8_t compact = 0;
+  if (compact_e != nullptr && !compact_e->value.empty()) {
+    const auto n = number(*compact_e, DataType::Unsigned8);
+    if (n > 0xFE) d_.fail(compact_e->line, "CompactSubObj=" + compact_e->value + ": sub-index above 0xFE");
+    compact = static_cast<std::uint8_t>(n);
+  }
+  const bool is_var = code == od::ObjectCode::Var || code == od::ObjectCode::Domain;
+
+  const auto* subnumber = s.find("subnumber");
+  if (subnumber != nullptr && !subnumber->value.empty()) {
+    const auto n = number(*subnumber, DataType::Unsigned8);
+    if (compact != 0 && !is_var) {
+      if (n != 0 && n != compact + 1u) {
+        d_.warn(subnumber->line, "SubNumber=" + subnumber->value + " ignored: CompactSubObj=" + compact_e->value +
+                                     " gives " + std::to_string(compact + 1) + " sub-objects");
+      }
+    } else if (n != secs.subs.size()) {
+      d_.fail(subnumber->line, "SubNumber=" + subnumber->value + " but " + subject(s) + " has " +
+                                   std::to_string(secs.subs.size()) + " sub-object sections");
+    }
+  }
+
+  od::Object obj;
+  obj.index = index;
+  obj.code = code;
+  if (const auto* name = s.find("parametername")) obj.name = name->value;
+
+  if (is_var) {
+    if (!secs.subs.empty()) {
+      const auto* sub = secs.subs.begin()->second;
+      d_.fail(sub->line, std::string(od::to_string(code)) + " object " + subject(s) +
+                             " cannot have sub-object section " + subject(*sub));
+    }
+    if (compact != 0) d_.warn(compact_e->line, "CompactSubObj ignored: " + subject(s) + " is not an ARRAY or RECORD");
+    obj.subs.emplace(0, finish(read_template(s, code == od::ObjectCode::Domain), 0, nullptr));
+  } else if (compact != 0) {
+    if (!secs.subs.empty()) {
+      const auto* sub = secs.subs.begin()->second;
+      d_.fail(sub->line, subject(s) + " has CompactSubObj and also sub-object section " + subject(*sub));
+    }
+    const Template t = read_template(s, false);
+    od::SubEntry sub0;
+    sub0.sub = 0;
+    sub0.name = "Highest sub-index supported";
+    sub0.type = DataType::Unsigned8;
+    sub0.access = od::Access::ReadOnly;
+    sub0.default_value = Value::of_unsigned(DataType::Unsigned8, compact);
+    sub0.value = *sub0.default_value;
+    obj.subs.emplace(0, std::move(sub0));
+
+    std::map<std::uint8_t, const IniEntry*> names, values;
+    if (secs.names != nullptr) names = numbered(*secs.names, compact);
+    if (secs.values != nullptr) values = numbered(*secs.values, compact);
+    for (unsigned i = 1; i <= compact; ++i) {
+      const auto sub = static_cast<std::uint8_t>(i);
+      Template ti = t;
+      ti.name = names.contains(sub) ? names.at(sub)->value : t.name + std::to_string(i);
+      Parsed override_value;
+      if (values.contains(sub)) {
+        override_value =
+            parse_object_value(values.at(sub), t.type, subject(*secs.values) + " entry " + std::to_string(i));
+        check_in_limits(t, override_value);
+      }
+      obj.subs.emplace(sub, finish(ti, sub, &override_value));
+    }
+  } else {
+    if (secs.subs.empty()) {
+      d_.fail(s.line, std::string(od::to_string(code)) + " object " + subject(s) + " has no sub-objects (no [" +
+                          hex4(index) + "subN] sections and no CompactSubObj)");
+    }
+    for (const auto& [sub, ss] : secs.subs) {
+      warn_unknown_keys(*ss, kSubKeys);
+      bool domain = false;
+      if (const auto* ot = ss->find("objecttype"); ot != nullptr && !ot->value.empty()) {
+        const auto c = number(*ot, DataType::Unsigned8);
+        if (c != 0x7 && c != 0x2) d_.fail(ot->line, "sub-object " + subject(*ss) + " must be a VAR (ObjectType 0x7)");
+        domain = c == 0x2;
+      }
+      obj.subs.emplace(sub, finish(read_template(*ss, domain), sub, nullptr));
+    }
+    if (!obj.subs.contains(0)) {
+      const auto highest = obj.subs.rbegin()->first;
+      d_.warn(s.line, subject(s) + " has no sub-index 0; assumed UNSIGNED8 ro = " + std::to_string(highest));
+      od::SubEntry sub0;
+      sub0.name = "Highest sub-index supported";
+      sub0.default_value = Value::of_unsigned(DataType::Unsigned8, highest);
+      sub0.value = *sub0.default_value;
+      obj.subs.emplace(0, std::move(sub0));
+    } else if (obj.subs.at(0).type != DataType::Unsigned8) {
+      d_.warn(secs.subs.at(0)->line,
+              "sub-index 0 of " + subject(s) + " is " + type_text(obj.subs.at(0).type) + ", not UNSIGNED8");
+    }
+    for (const auto* extra : {secs.names, secs.values}) {
+      if (extra != nullptr) d_.warn(extra->line, "section " + subject(*extra) + " ignored: no CompactSubObj");
+    }
+  }
+
+  if (secs.links != nullptr) {
+    const IniSection& ls = *secs.links;
+    const IniEntry* count = nullptr;
+    std::map<std::uint64_t, const IniEntry*> entries;
+    for (const auto& e : ls.entries) {
+      if (e.lkey == "objectlinks") {
+        count = &e;
+      } else if (all_dec(e.lkey) && e.lkey.size() < 6) {
+        entries[std::stoull(e.lkey)] = &e;
+      } else {
+        d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(ls) + " ignored");
+      }
+    }
+    if (count != nullptr && !count->value.empty() && number(*count, DataType::Unsigned16) != entries.size()) {
+      d_.fail(count->line, "ObjectLinks=" + count->value + " but " + subject(ls) + " has " +
+                               std::to_string(entries.size()) + " entries");
+    }
+    auto& links = out_.object_links[index];
+    for (const auto& [k, e] : entries) {
+      const auto target = static_cast<std::uint16_t>(number(*e, DataType::Unsigned16));
+      if (target == 0) d_.fail(e->line, "index 0 is not an object");
+      links.push_back(target);
+    }
+  }
+
+  out_.od.insert(std::move(obj));
+}
+
+DeviceDescription Builder::run() {
+  const IniSection* file_info = nullptr;
+  const IniSection* device_info = nullptr;
+  const IniSection* commissioning = nullptr;
+  const IniSection* dummy = nullptr;
+  const IniSection* comments = nullptr;
+  std::array<const IniSection*, 3> lists{};  // mandatory, optional, manufacturer
+  for (const auto& s : ini_.sections) {
+    const auto& n = s.lname;
+    if (n == "fileinfo") {
+      file_info = &s;
+    } else if (n == "deviceinfo") {
+      device_info = &s;
+    } else if (n == "dummyusage") {
+      dummy = &s;
+    } else if (n == "comments") {
+      comments = &s;
+    } else if (n == "mandatoryobjects") {
+      lists[0] = &s;
+    } else if (n == "optionalobjects") {
+      lists[1] = &s;
+    } else if (n == "manufacturerobjects") {
+      lists[2] = &s;
+    } else if (n == "devicecomissioning" || n == "devicecommissioning") {
+      if (commissioning != nullptr) {
+        d_.fail(s.line,
+                "both [DeviceComissioning] and " + subject(s) + " (line " + std::to_string(commissioning->line) + ")");
+      }
+      if (n == "devicecommissioning") d_.warn(s.line, "CiA 306 spells the section [DeviceComissioning]; accepted");
+      commissioning = &s;
+    } else if (!classify(s, d_)) {
+      d_.warn(s.line, "unknown section " + subject(s) + " ignored");
+    }
+  }
+
+  if (file_info != nullptr) {
+    read_file_info(*file_info);
+  } else {
+    d_.warn(0, "no [FileInfo] section");
+  }
+  if (device_info != nullptr) {
+    read_device_info(*device_info);
+  } else {
+    d_.warn(0, "no [DeviceInfo] section");
+  }
+  if (commissioning != nullptr) {
+    read_commissioning(*commissioning);
+    out_.is_dcf = true;
+  }
+  if (dummy != nullptr) read_dummy_usage(*dummy);
+  if (comments != nullptr) read_comments(*comments);
+
+  out_.node_id = node_id_arg_;
+  if (out_.commissioning && out_.commissioning->node_id) {
+    if (!out_.node_id) {
+      out_.node_id = out_.commissioning->node_id;
+    } else if (*out_.node_id != *out_.commissioning->node_id) {
+      const auto* e = commissioning->find("nodeid");
+      d_.warn(e->line, "node-ID " + std::to_string(*out_.node_id) + " given overrides NodeID=" + e->value);
+    }
+  }
+
+  collect_object_sections();
+  std::array<std::vector<std::uint16_t>*, 3> targets = {&out_.mandatory_objects, &out_.optional_objects,
+                                                        &out_.manufacturer_objects};
+  for (std::size_t i = 0; i < lists.size(); ++i) {
+    if (lists[i] != nullptr) *targets[i] = read_list(*lists[i]);
+  }
+  for (const auto& [index, secs] : objs_) {
+    if (secs.main == nullptr) continue;
+    // Data type definitions (below 0260h) are not listed by convention.
+    if (!listed_.contains(index) && index >= 0x0260) {
+      d_.warn(secs.main->line, "object section " + subject(*secs.main) + " is not in any object list; loaded anyway");
+    }
+    build_object(index, secs);
+  }
+  out_.warnings = d_.take_warnings();
+  return std::move(out_);
+}
+
+}  // namespace
+
+DeviceDescription parse_device_description(std::string_view text, std::string file_name,
+                                           std::optional<std::uint8_t> node_id) {
+  Diagnostics diag(file_name);
+  if (node_id && (*node_id < 1 || *node_id > 127)) {
+    diag.fail(0, "node-ID " + std::to_string(*node_id) + " is outside 1..127");
+  }
+  const IniFile ini = detail::parse_ini(text, diag);
+  return Builder(diag, ini, file_name, node_id).run();
+}
+
+DeviceDescription load_device_description(const std::filesystem::path& path, std::optional<std::uint8_t> node_id) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw EdsError(path.string(), 0, "cannot open the file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw EdsError(path.string(), 0, "cannot read the file");
+  return parse_device_description(text.str(), path.string(), node_id);
+}
+
+}  // namespace canopen::eds
