@@ -13,3 +13,7 @@ if(CANOPEN_SANITIZE)
     -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined)
   target_link_options(canopen_options INTERFACE -fsanitize=address,undefined)
 endif()
+if(CANOPEN_FUZZ)
+  # Coverage instrumentation for the libraries; fuzz executables add -fsanitize=fuzzer.
+  target_compile_options(canopen_options INTERFACE -fsanitize=fuzzer-no-link)
+endif()

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's second command: installs what is missing, builds, and runs
 # every test: unit tests, system tests over real SocketCAN inside user-mode
-# Linux, a benchmark smoke run, then the unit tests again under ASan/UBSan.
+# Linux, a benchmark smoke run, then the unit tests again under ASan/UBSan,
+# then the libFuzzer targets for a fixed number of inputs each.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./deploy/install-deps.sh
@@ -18,3 +19,9 @@ cmake --preset asan
 cmake --build --preset asan -j "$jobs"
 echo "== tests: unit under ASan + UBSan"
 ctest --preset asan -j "$jobs"
+
+echo "== build (clang, libFuzzer, ASan + UBSan)"
+cmake --preset fuzz
+cmake --build --preset fuzz -j "$jobs"
+echo "== fuzz: EDS reader, SDO server, SDO client, a fixed number of inputs each"
+ctest --preset fuzz -j "$jobs"

@@ -1,8 +1,10 @@
 // canopen-gateway: opens the configured CAN networks and runs everything on
-// one io_context. This version logs frames and bus-state changes and sends
-// the gateway's CANopen boot-up message (CiA 301 7.2.8.3.3) on each network.
+// one io_context. On each network the gateway is a CANopen device: it sends
+// its boot-up message (CiA 301 7.2.8.3.3) and serves its own object
+// dictionary over SDO (7.2.4); it logs frames and bus-state changes.
 #include <csignal>
 #include <cstdio>
+#include <deque>
 #include <memory>
 #include <string>
 #include <vector>
@@ -10,7 +12,10 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 
+#include "canopen/od/gateway_dictionary.hpp"
+#include "canopen/sdo/server.hpp"
 #include "canopen/socketcan/channel.hpp"
+#include "canopen/socketcan/service_driver.hpp"
 #include "cli.hpp"
 #include "log.hpp"
 
@@ -44,10 +49,25 @@ int run(const gateway::CliOptions& opts) {
     }
   }
 
+  // Per network: the gateway's own dictionary, its SDO server, and the
+  // driver that feeds them frames and time. Deques: addresses stay put.
+  canopen::od::GatewayIdentity identity;
+  identity.software_version = CANOPEN_GATEWAY_VERSION;
+  std::deque<canopen::od::ObjectDictionary> dictionaries;
+  std::deque<canopen::sdo::SdoServer> sdo_servers;
+  std::deque<canopen::socketcan::ServiceDriver> drivers;
+
   for (std::size_t i = 0; i < channels.size(); ++i) {
     auto& ch = *channels[i];
     const std::string prefix = "net " + std::to_string(i + 1) + " " + std::string(ch.name());
-    ch.on_frames([&log, prefix](std::span<const canopen::can::Frame> frames) {
+    auto& od = dictionaries.emplace_back(
+        canopen::od::make_gateway_dictionary(static_cast<std::uint8_t>(opts.node_id), identity));
+    canopen::sdo::ServerConfig sdo_cfg;
+    sdo_cfg.node_id = static_cast<std::uint8_t>(opts.node_id);
+    auto& server = sdo_servers.emplace_back(od, sdo_cfg, [&ch](const canopen::can::Frame& f) { ch.send(f); });
+    auto& driver = drivers.emplace_back(io, ch);
+    driver.add(server);
+    driver.on_frames([&log, prefix](std::span<const canopen::can::Frame> frames) {
       if (log.enabled(gateway::LogLevel::Debug)) {
         for (const auto& f : frames) log.debug(prefix + " rx " + canopen::can::to_string(f));
       }
@@ -78,6 +98,7 @@ int run(const gateway::CliOptions& opts) {
   signals.async_wait([&](const boost::system::error_code& ec, int sig) {
     if (ec) return;
     log.info(std::string("received ") + (sig == SIGINT ? "SIGINT" : "SIGTERM") + ", shutting down");
+    drivers.clear();
     for (auto& ch : channels) ch->close();
     monitor->stop();
   });

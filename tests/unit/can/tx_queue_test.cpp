@@ -440,14 +440,17 @@ TEST(TxQueueBatch, RingWrapAroundKeepsOrder) {
   TxQueue q(8);
   FakeBatchWriter w;
   for (std::uint16_t i = 0; i < 6; ++i) q.push(numbered(i));
-  w.script.push_back({6, WriteResult::Written});
-  ASSERT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
-  // The head is now at slot 6: the next 8 frames wrap around the ring.
-  for (std::uint16_t i = 6; i < 14; ++i) ASSERT_TRUE(q.push(numbered(i)));
+  // Four go out, then the device is full: frames 4 and 5 stay at slots 4-5.
+  w.script.push_back({4, WriteResult::Written});
+  w.script.push_back({0, WriteResult::NoBuffers});
+  ASSERT_EQ(q.flush_batch(w, 64), FlushResult::NoBuffers);
+  // Six more fill slots 6-7 and wrap around to 0-3.
+  for (std::uint16_t i = 6; i < 12; ++i) ASSERT_TRUE(q.push(numbered(i)));
   EXPECT_FALSE(q.push(numbered(99))) << "capacity is still 8";
+  w.offered_sizes.clear();
   ASSERT_EQ(q.flush_batch(w, 64), FlushResult::Drained);
-  EXPECT_EQ(w.accepted, range(0, 14));
-  EXPECT_EQ(w.offered_sizes.back(), 6U) << "second run starts at slot 0 after the wrap";
+  EXPECT_EQ(w.accepted, range(0, 12));
+  EXPECT_EQ(w.offered_sizes, (std::vector<std::size_t>{4, 4})) << "slots 4-7, then 0-3 after the wrap";
 }
 
 TEST(TxQueueBatch, PartialWriteOffersTheRestAgain) {
