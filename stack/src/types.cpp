@@ -724,6 +724,32 @@ void encode_into(const Value& v, Bytes& out) {
   }
 }
 
+bool holds_its_type(const Value& v) {
+  const DataType t = v.type;
+  if (t == DataType::Boolean) return std::holds_alternative<bool>(v.data);
+  if (is_signed_integer(t)) return std::holds_alternative<std::int64_t>(v.data);
+  if (is_unsigned_integer(t)) return std::holds_alternative<std::uint64_t>(v.data);
+  switch (t) {
+    case DataType::Real32: return std::holds_alternative<float>(v.data);
+    case DataType::Real64: return std::holds_alternative<double>(v.data);
+    case DataType::VisibleString: return std::holds_alternative<std::string>(v.data);
+    case DataType::OctetString:
+    case DataType::Domain: return std::holds_alternative<Bytes>(v.data);
+    case DataType::UnicodeString: return std::holds_alternative<std::u16string>(v.data);
+    case DataType::TimeOfDay:
+    case DataType::TimeDifference: return std::holds_alternative<TimeOfDay>(v.data);
+    default: return false;
+  }
+}
+
+std::size_t encoded_size(const Value& v) {
+  if (auto s = fixed_size(v.type)) return *s;
+  if (const auto* str = std::get_if<std::string>(&v.data)) return str->size();
+  if (const auto* bytes = std::get_if<Bytes>(&v.data)) return bytes->size();
+  if (const auto* u16 = std::get_if<std::u16string>(&v.data)) return 2 * u16->size();
+  return 0;
+}
+
 Bytes encode(const Value& v) {
   Bytes out;
   if (auto s = fixed_size(v.type)) out.reserve(*s);

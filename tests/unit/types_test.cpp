@@ -1,5 +1,6 @@
 // CiA 301 7.1 data types: names, sizes, transfer syntax, text and limits.
 #include "canopen/types.hpp"
+#include "support/value_samples.hpp"
 
 #include <gtest/gtest.h>
 
@@ -700,38 +701,38 @@ TEST(CheckLimits, NonNumericValuesAreNotChecked) {
 // ---- every type: text and wire round trips ----
 
 TEST(RoundTrip, EveryTypeThroughTextAndWire) {
-  const std::pair<DataType, std::string_view> samples[] = {
-      {DataType::Boolean, "1"},
-      {DataType::Integer8, "-100"},
-      {DataType::Integer16, "-30000"},
-      {DataType::Integer24, "-8388608"},
-      {DataType::Integer32, "2147483647"},
-      {DataType::Integer40, "-549755813888"},
-      {DataType::Integer48, "140737488355327"},
-      {DataType::Integer56, "-36028797018963968"},
-      {DataType::Integer64, "-9223372036854775808"},
-      {DataType::Unsigned8, "255"},
-      {DataType::Unsigned16, "65535"},
-      {DataType::Unsigned24, "16777215"},
-      {DataType::Unsigned32, "4294967295"},
-      {DataType::Unsigned40, "1099511627775"},
-      {DataType::Unsigned48, "281474976710655"},
-      {DataType::Unsigned56, "72057594037927935"},
-      {DataType::Unsigned64, "18446744073709551615"},
-      {DataType::Real32, "-1.25"},
-      {DataType::Real64, "3.141592653589793"},
-      {DataType::TimeOfDay, "2024-02-29T23:59:59.999Z"},
-      {DataType::TimeDifference, "65535 86399999"},
-      {DataType::VisibleString, "Device name"},
-      {DataType::OctetString, "00ff10"},
-      {DataType::UnicodeString, "gr\xC3\xBC\xC3\x9F"},
-      {DataType::Domain, "deadbeef"},
-  };
+  const auto& samples = test::kEveryTypeSamples;
   for (auto [t, text] : samples) {
     const Value v = parse(t, text);
     EXPECT_EQ(v.type, t);
     EXPECT_EQ(format_value(v), text) << standard_name(t);
     EXPECT_EQ(dec(t, encode(v)), v) << standard_name(t);
+  }
+}
+
+}  // namespace
+}  // namespace canopen
+
+namespace canopen {
+namespace {
+
+TEST(Value, EncodedSizeEqualsTheSizeOfTheEncoding) {
+  for (const auto& [t, text] : test::kEveryTypeSamples) {
+    const Value v = parse_value(t, text).value();
+    EXPECT_EQ(encoded_size(v), encode(v).size()) << standard_name(t);
+  }
+}
+
+TEST(Value, HoldsItsTypeChecksTheRepresentation) {
+  EXPECT_TRUE(holds_its_type(Value::of_unsigned(DataType::Unsigned24, 5)));
+  EXPECT_TRUE(holds_its_type(Value::zero(DataType::TimeOfDay)));
+  EXPECT_TRUE(holds_its_type(Value::of_bytes(DataType::Domain, {1, 2})));
+  EXPECT_FALSE(holds_its_type(Value{DataType::Unsigned16, std::int64_t{5}})) << "unsigned held as signed";
+  EXPECT_FALSE(holds_its_type(Value{DataType::Real32, 1.0})) << "REAL32 held as double";
+  EXPECT_FALSE(holds_its_type(Value{DataType::VisibleString, Bytes{}}));
+  for (auto t : {DataType::Boolean, DataType::Integer56, DataType::Unsigned64, DataType::Real64,
+                 DataType::UnicodeString, DataType::OctetString, DataType::TimeDifference}) {
+    EXPECT_TRUE(holds_its_type(Value::zero(t))) << standard_name(t);
   }
 }
 

@@ -110,6 +110,10 @@ struct Value {
   friend bool operator==(const Value&, const Value&) = default;
 };
 
+// Whether v.data is the representation listed above for v.type. encode()
+// requires it; code that takes Values from outside checks it first.
+bool holds_its_type(const Value& v);
+
 // Minimum and maximum of an integer type as int64/uint64 (e.g. i24: -8388608..8388607).
 std::int64_t signed_min(DataType t);
 std::int64_t signed_max(DataType t);
@@ -118,6 +122,8 @@ std::uint64_t unsigned_max(DataType t);
 // Little-endian transfer syntax (7.1.3.2). encode() of a value whose data
 // does not match its type is a programming error (asserts).
 Bytes encode(const Value& v);
+// Number of bytes encode(v) produces, without encoding (cheap for a large DOMAIN).
+std::size_t encoded_size(const Value& v);
 void encode_into(const Value& v, Bytes& out);  // appends
 // Decodes `bytes` as `type`. Fixed-size types need exactly their size
 // (LengthTooLow / LengthTooHigh otherwise); VISIBLE_STRING stops at the

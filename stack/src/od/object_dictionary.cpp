@@ -20,38 +20,6 @@ std::string where(std::uint16_t index, std::uint8_t sub) {
   return buf.data();
 }
 
-// Whether v.data is the C++ representation types.hpp prescribes for v.type;
-// encode() asserts on a mismatch, so set() refuses such values up front.
-bool has_representation_of_its_type(const Value& v) {
-  switch (v.type) {
-    case DataType::Boolean: return std::holds_alternative<bool>(v.data);
-    case DataType::Integer8:
-    case DataType::Integer16:
-    case DataType::Integer24:
-    case DataType::Integer32:
-    case DataType::Integer40:
-    case DataType::Integer48:
-    case DataType::Integer56:
-    case DataType::Integer64: return std::holds_alternative<std::int64_t>(v.data);
-    case DataType::Unsigned8:
-    case DataType::Unsigned16:
-    case DataType::Unsigned24:
-    case DataType::Unsigned32:
-    case DataType::Unsigned40:
-    case DataType::Unsigned48:
-    case DataType::Unsigned56:
-    case DataType::Unsigned64: return std::holds_alternative<std::uint64_t>(v.data);
-    case DataType::Real32: return std::holds_alternative<float>(v.data);
-    case DataType::Real64: return std::holds_alternative<double>(v.data);
-    case DataType::VisibleString: return std::holds_alternative<std::string>(v.data);
-    case DataType::OctetString:
-    case DataType::Domain: return std::holds_alternative<Bytes>(v.data);
-    case DataType::UnicodeString: return std::holds_alternative<std::u16string>(v.data);
-    case DataType::TimeOfDay:
-    case DataType::TimeDifference: return std::holds_alternative<TimeOfDay>(v.data);
-  }
-  return false;
-}
 
 }  // namespace
 
@@ -186,8 +154,7 @@ std::optional<std::size_t> ObjectDictionary::upload_size(std::uint16_t index, st
   const SubEntry* entry = find(index, sub);
   if (entry == nullptr || !readable(entry->access)) return std::nullopt;
   if (read_hooks_.contains(index) || dict_read_hooks_.contains(index)) return std::nullopt;
-  if (auto size = fixed_size(entry->type)) return *size;
-  return encode(entry->value).size();
+  return encoded_size(entry->value);
 }
 
 // ---- local access ----------------------------------------------------------------
@@ -203,7 +170,7 @@ Result<Value> ObjectDictionary::get(std::uint16_t index, std::uint8_t sub) const
 std::error_code ObjectDictionary::set(std::uint16_t index, std::uint8_t sub, Value v) {
   SubEntry* entry = find(index, sub);
   if (entry == nullptr) return err(find(index) == nullptr ? SdoAbort::NoSuchObject : SdoAbort::NoSuchSubIndex);
-  if (v.type != entry->type || !has_representation_of_its_type(v)) return err(SdoAbort::LengthMismatch);
+  if (v.type != entry->type || !holds_its_type(v)) return err(SdoAbort::LengthMismatch);
   entry->value = std::move(v);
   return {};
 }
