@@ -1,0 +1,121 @@
+// NMT master (CiA 301 7.2.8): node control commands, tracking of every node
+// heard on the error control COB-IDs (boot-up, heartbeat), heartbeat
+// consumer (1016h) and node guarding master (7.2.8.3.2.1).
+//
+// Sans-I/O: the caller feeds received frames and the current time; the
+// master emits frames through the sink and events through the event sink.
+// The caller MUST
+//   - pass every received frame to on_frame() (only 701h..77Fh are used);
+//   - call on_time(now) when now >= next_deadline() (consumer timeouts,
+//     guarding requests, node life time expiry).
+//
+// Behaviour, as chosen here where the standard leaves room:
+//   - Events carry the receive timestamp of the frame that caused them;
+//     Lost events have no causing frame and carry Frame::Clock::time_point{}
+//     (the network stamps them with its own wall clock).
+//   - A boot-up message (00h) means the node is now pre-operational: the
+//     event is NodeStateEvent{cause BootUp, state PreOperational}. It also
+//     counts as the node's first heartbeat, clears a Lost condition and
+//     expects the next guarding toggle to be 0 (the node reset communication).
+//   - A heartbeat consumer starts monitoring with the first heartbeat (or
+//     boot-up) received after it is configured; the node is Lost when no
+//     heartbeat arrived for exactly the consumer time (at last + T, not
+//     before). After Lost, the next heartbeat gives Recovered.
+//   - Node guarding: the first request goes out when guarding is set up,
+//     then one every guard time. A response whose toggle bit equals the
+//     previous accepted one is ignored and counted in toggle_errors
+//     (7.2.8.3.2.1). No accepted response for guard time x life time factor
+//     -> Lost; requests continue so a later response gives Recovered.
+//   - A data frame on 700h + node while a guarding request to that node is
+//     outstanding is its guarding response; otherwise it is a heartbeat.
+//
+// Thread safety: none; use from one thread. Sinks are called synchronously
+// and must not call back into the master.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+
+#include "canopen/can/frame.hpp"
+#include "canopen/clock.hpp"
+#include "canopen/events.hpp"
+#include "canopen/nmt/nmt.hpp"
+#include "canopen/od/object_dictionary.hpp"
+
+namespace canopen::nmt {
+
+// Receives NodeStateEvent and HeartbeatEvent bodies with the timestamp of
+// the causing frame.
+using EventSink = std::function<void(const EventBody& body, can::Frame::Clock::time_point timestamp)>;
+
+// What the master knows about one node.
+struct NodeStatus {
+  std::optional<NmtState> state;     // last reported (PreOperational after a boot-up)
+  std::optional<TimePoint> last_seen;  // last boot-up, heartbeat or accepted guarding response
+  std::uint32_t boot_ups = 0;
+  std::uint64_t heartbeats = 0;
+  std::uint32_t toggle_errors = 0;   // guarding responses ignored for a repeated toggle bit
+  bool lost = false;
+};
+
+class NmtMaster {
+ public:
+  NmtMaster(FrameSink sink, EventSink events);
+
+  // Sends a node control command to `node` (1..127) or to all nodes (0).
+  // Returns false (nothing sent) for node-IDs above 127.
+  bool send_command(NmtCommand cs, std::uint8_t node);
+
+  bool on_frame(const can::Frame& frame, TimePoint now);
+  // TimePoint::max() when nothing is monitored.
+  TimePoint next_deadline() const;
+  void on_time(TimePoint now);
+
+  // Heartbeat consumer for one node (1..127); time 0 removes it. Changing
+  // the time restarts monitoring from the next heartbeat.
+  bool set_heartbeat_consumer(std::uint8_t node, Duration time);
+  // Replaces every consumer with the used entries of 1016h (bits 16..23
+  // node-ID, bits 0..15 time in ms; entries with time 0 or node-ID 0 / >127
+  // are unused). Call again after 1016h changes.
+  void configure_consumers(const od::ObjectDictionary& dictionary);
+
+  // Node guarding for one node: a request every guard_time, Lost after
+  // guard_time x life_time_factor without a response. Either 0 removes it.
+  bool set_node_guarding(std::uint8_t node, Duration guard_time, std::uint8_t life_time_factor, TimePoint now);
+
+  // nullptr for a node never heard of.
+  const NodeStatus* node(std::uint8_t id) const;
+  const std::map<std::uint8_t, NodeStatus>& nodes() const { return nodes_; }
+
+ private:
+  struct Consumer {
+    Duration time{};
+    TimePoint deadline = TimePoint::max();  // max: waiting for the first heartbeat
+  };
+  struct Guarding {
+    Duration guard_time{};
+    std::uint8_t life_factor = 0;
+    TimePoint next_request = TimePoint::max();
+    TimePoint life_deadline = TimePoint::max();
+    bool awaiting = false;     // a request is outstanding
+    bool last_toggle = true;   // so that the first accepted response has toggle 0
+  };
+
+  void on_boot_up(std::uint8_t node, const can::Frame& f, TimePoint now);
+  void on_heartbeat(std::uint8_t node, NmtState s, const can::Frame& f, TimePoint now);
+  void on_guard_response(std::uint8_t node, Guarding& g, std::uint8_t byte, const can::Frame& f, TimePoint now);
+  // Updates the state and emits Recovered or a state change with `cause`.
+  void report_state(std::uint8_t node, NmtState s, NodeStateEvent::Cause cause, const can::Frame& f);
+  void lose(std::uint8_t node);
+  void emit(const EventBody& body, can::Frame::Clock::time_point ts);
+
+  FrameSink sink_;
+  EventSink events_;
+  std::map<std::uint8_t, NodeStatus> nodes_;
+  std::map<std::uint8_t, Consumer> consumers_;
+  std::map<std::uint8_t, Guarding> guarding_;
+};
+
+}  // namespace canopen::nmt

@@ -1,0 +1,185 @@
+#include "canopen/nmt/master.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <utility>
+#include <variant>
+
+namespace canopen::nmt {
+
+namespace {
+constexpr std::uint16_t kConsumerHeartbeat = 0x1016;
+bool valid_node(std::uint8_t node) { return node >= 1 && node <= kMaxNodeId; }
+}  // namespace
+
+NmtMaster::NmtMaster(FrameSink sink, EventSink events) : sink_(std::move(sink)), events_(std::move(events)) {}
+
+bool NmtMaster::send_command(NmtCommand cs, std::uint8_t node) {
+  if (node > kMaxNodeId) return false;
+  sink_(make_command_frame(cs, node));
+  return true;
+}
+
+void NmtMaster::emit(const EventBody& body, can::Frame::Clock::time_point ts) {
+  if (events_) events_(body, ts);
+}
+
+bool NmtMaster::on_frame(const can::Frame& frame, TimePoint now) {
+  const auto node = error_control_node(frame);
+  if (!node || frame.remote() || frame.len < 1) return false;
+  const std::uint8_t byte = frame.data[0];
+  // Boot-up first: a guarding response never carries state 0, and a node
+  // that rebooted while a request was outstanding must still count as booted.
+  if (byte == 0x00) {
+    on_boot_up(*node, frame, now);
+    return true;
+  }
+  if (auto g = guarding_.find(*node); g != guarding_.end() && g->second.awaiting) {
+    on_guard_response(*node, g->second, byte, frame, now);
+    return true;
+  }
+  const auto s = nmt_state_from_byte(byte);
+  if (!s || *s == NmtState::Initialising) return true;  // ours, but not a state we know: ignored
+  on_heartbeat(*node, *s, frame, now);
+  return true;
+}
+
+void NmtMaster::report_state(std::uint8_t node, NmtState s, NodeStateEvent::Cause cause, const can::Frame& f) {
+  NodeStatus& st = nodes_[node];
+  const std::optional<NmtState> previous = st.state;
+  st.state = s;
+  if (st.lost) {
+    st.lost = false;
+    emit(NodeStateEvent{node, s, previous, NodeStateEvent::Cause::Recovered}, f.timestamp);
+  } else if (previous != s) {
+    emit(NodeStateEvent{node, s, previous, cause}, f.timestamp);
+  }
+}
+
+void NmtMaster::on_boot_up(std::uint8_t node, const can::Frame& f, TimePoint now) {
+  NodeStatus& st = nodes_[node];
+  const std::optional<NmtState> previous = st.state;
+  ++st.boot_ups;
+  st.state = NmtState::PreOperational;
+  st.last_seen = now;
+  st.lost = false;
+  if (auto c = consumers_.find(node); c != consumers_.end()) c->second.deadline = now + c->second.time;
+  if (auto g = guarding_.find(node); g != guarding_.end()) {
+    // The node reset communication: its next guarding response has toggle 0.
+    g->second.last_toggle = true;
+    g->second.life_deadline = now + g->second.guard_time * g->second.life_factor;
+  }
+  emit(NodeStateEvent{node, NmtState::PreOperational, previous, NodeStateEvent::Cause::BootUp}, f.timestamp);
+}
+
+void NmtMaster::on_heartbeat(std::uint8_t node, NmtState s, const can::Frame& f, TimePoint now) {
+  NodeStatus& st = nodes_[node];
+  ++st.heartbeats;
+  st.last_seen = now;
+  if (auto c = consumers_.find(node); c != consumers_.end()) c->second.deadline = now + c->second.time;
+  emit(HeartbeatEvent{node, s}, f.timestamp);
+  report_state(node, s, NodeStateEvent::Cause::Heartbeat, f);
+}
+
+void NmtMaster::on_guard_response(std::uint8_t node, Guarding& g, std::uint8_t byte, const can::Frame& f,
+                                  TimePoint now) {
+  NodeStatus& st = nodes_[node];
+  const bool toggle = (byte & kToggleBit) != 0;
+  const auto s = nmt_state_from_byte(byte);
+  if (toggle == g.last_toggle) {
+    // 7.2.8.3.2.1: of two responses with the same toggle bit the later is ignored.
+    ++st.toggle_errors;
+    return;
+  }
+  if (!s || *s == NmtState::Initialising) return;
+  g.last_toggle = toggle;
+  g.awaiting = false;
+  g.life_deadline = now + g.guard_time * g.life_factor;
+  st.last_seen = now;
+  report_state(node, *s, NodeStateEvent::Cause::NodeGuarding, f);
+}
+
+void NmtMaster::lose(std::uint8_t node) {
+  NodeStatus& st = nodes_[node];
+  if (st.lost) return;
+  st.lost = true;
+  emit(NodeStateEvent{node, std::nullopt, st.state, NodeStateEvent::Cause::Lost}, {});
+}
+
+TimePoint NmtMaster::next_deadline() const {
+  TimePoint next = TimePoint::max();
+  for (const auto& [node, c] : consumers_) next = std::min(next, c.deadline);
+  for (const auto& [node, g] : guarding_) next = std::min({next, g.next_request, g.life_deadline});
+  return next;
+}
+
+void NmtMaster::on_time(TimePoint now) {
+  for (auto& [node, c] : consumers_) {
+    if (now >= c.deadline) {
+      c.deadline = TimePoint::max();  // until the next heartbeat
+      lose(node);
+    }
+  }
+  for (auto& [node, g] : guarding_) {
+    if (now >= g.next_request) {
+      sink_(make_guard_request(node));
+      g.awaiting = true;
+      while (g.next_request <= now) g.next_request += g.guard_time;
+    }
+    if (now >= g.life_deadline) {
+      g.life_deadline = TimePoint::max();  // until the next accepted response
+      lose(node);
+    }
+  }
+}
+
+bool NmtMaster::set_heartbeat_consumer(std::uint8_t node, Duration time) {
+  if (!valid_node(node)) return false;
+  if (time <= Duration::zero()) {
+    consumers_.erase(node);
+    return true;
+  }
+  auto [it, inserted] = consumers_.try_emplace(node);
+  if (inserted || it->second.time != time) it->second = Consumer{time, TimePoint::max()};
+  return true;
+}
+
+void NmtMaster::configure_consumers(const od::ObjectDictionary& dictionary) {
+  std::map<std::uint8_t, Duration> wanted;
+  if (const od::Object* obj = dictionary.find(kConsumerHeartbeat)) {
+    for (const auto& [sub, entry] : obj->subs) {
+      if (sub == 0) continue;
+      const auto* v = std::get_if<std::uint64_t>(&entry.value.data);
+      if (v == nullptr) continue;
+      const auto node = static_cast<std::uint8_t>((*v >> 16) & 0xFFU);
+      const auto ms = static_cast<std::uint16_t>(*v & 0xFFFFU);
+      if (ms == 0 || !valid_node(node)) continue;
+      wanted[node] = std::chrono::milliseconds(ms);
+    }
+  }
+  std::erase_if(consumers_, [&](const auto& kv) { return !wanted.contains(kv.first); });
+  for (const auto& [node, time] : wanted) set_heartbeat_consumer(node, time);
+}
+
+bool NmtMaster::set_node_guarding(std::uint8_t node, Duration guard_time, std::uint8_t life_time_factor,
+                                  TimePoint now) {
+  if (!valid_node(node)) return false;
+  if (guard_time <= Duration::zero() || life_time_factor == 0) {
+    guarding_.erase(node);
+    return true;
+  }
+  Guarding g;
+  g.guard_time = guard_time;
+  g.life_factor = life_time_factor;
+  g.next_request = now;
+  g.life_deadline = now + guard_time * life_time_factor;
+  guarding_[node] = g;
+  return true;
+}
+
+const NodeStatus* NmtMaster::node(std::uint8_t id) const {
+  const auto it = nodes_.find(id);
+  return it == nodes_.end() ? nullptr : &it->second;
+}
+
+}  // namespace canopen::nmt
