@@ -1,7 +1,9 @@
 // canopen-gateway: opens the configured CAN networks and runs everything on
-// one io_context. On each network the gateway is a CANopen device: it sends
-// its boot-up message (CiA 301 7.2.8.3.3) and serves its own object
-// dictionary over SDO (7.2.4); it logs frames and bus-state changes.
+// one io_context. On each network the gateway is a CANopen device (NMT
+// slave with boot-up and heartbeat, CiA 301 7.2.8/7.3; SDO server for its
+// own object dictionary, 7.2.4) and watches the other nodes (NMT master's
+// node tracking, EMCY consumer); it logs frames, node states, EMCYs and
+// bus-state changes.
 #include <csignal>
 #include <cstdio>
 #include <deque>
@@ -12,6 +14,9 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 
+#include "canopen/emcy/emcy.hpp"
+#include "canopen/nmt/master.hpp"
+#include "canopen/nmt/slave.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/sdo/server.hpp"
 #include "canopen/socketcan/channel.hpp"
@@ -55,6 +60,9 @@ int run(const gateway::CliOptions& opts) {
   identity.software_version = CANOPEN_GATEWAY_VERSION;
   std::deque<canopen::od::ObjectDictionary> dictionaries;
   std::deque<canopen::sdo::SdoServer> sdo_servers;
+  std::deque<canopen::nmt::NmtSlave> nmt_slaves;
+  std::deque<canopen::nmt::NmtMaster> nmt_masters;
+  std::deque<canopen::emcy::EmcyConsumer> emcy_consumers;
   std::deque<canopen::socketcan::ServiceDriver> drivers;
 
   for (std::size_t i = 0; i < channels.size(); ++i) {
@@ -65,8 +73,48 @@ int run(const gateway::CliOptions& opts) {
     canopen::sdo::ServerConfig sdo_cfg;
     sdo_cfg.node_id = static_cast<std::uint8_t>(opts.node_id);
     auto& server = sdo_servers.emplace_back(od, sdo_cfg, [&ch](const canopen::can::Frame& f) { ch.send(f); });
+    auto sink = [&ch](const canopen::can::Frame& f) { ch.send(f); };
+    auto& slave = nmt_slaves.emplace_back(
+        od, static_cast<std::uint8_t>(opts.node_id), sink,
+        canopen::nmt::SlaveCallbacks{
+            {}, {},
+            [&log, prefix](canopen::NmtState now_state, canopen::NmtState before) {
+              log.info(prefix + " own node " + std::string(canopen::to_string(before)) + " -> " +
+                       std::string(canopen::to_string(now_state)));
+              log.flush();
+            },
+            {}});
+    auto& master = nmt_masters.emplace_back(
+        sink, [&log, prefix](const canopen::EventBody& body, canopen::can::Frame::Clock::time_point) {
+          if (const auto* s = std::get_if<canopen::NodeStateEvent>(&body)) {
+            static constexpr const char* kCause[] = {"boot-up", "heartbeat", "node guarding", "lost", "recovered"};
+            std::string msg = prefix + " node " + std::to_string(s->node) + " " +
+                              (s->state ? std::string(canopen::to_string(*s->state)) : std::string("lost")) + " (" +
+                              kCause[static_cast<int>(s->cause)] + ")";
+            log.log(s->cause == canopen::NodeStateEvent::Cause::Lost ? gateway::LogLevel::Warn
+                                                                      : gateway::LogLevel::Info,
+                    msg);
+            log.flush();  // may come from a timer (lost), not only from a frame batch
+          } else if (const auto* h = std::get_if<canopen::HeartbeatEvent>(&body)) {
+            if (log.enabled(gateway::LogLevel::Trace))
+              log.trace(prefix + " node " + std::to_string(h->node) + " heartbeat " +
+                        std::string(canopen::to_string(h->state)));
+          }
+        });
+    auto& emcy = emcy_consumers.emplace_back(
+        canopen::emcy::EmcyConsumerConfig{}, [&log, prefix](const canopen::EmcyEvent& e) {
+          char code[32];
+          std::snprintf(code, sizeof code, "%04Xh, error register %02Xh", e.error_code, e.error_register);
+          log.warn(prefix + " node " + std::to_string(e.node) + " EMCY " + code + ": " + e.description);
+        });
     auto& driver = drivers.emplace_back(io, ch);
     driver.add(server);
+    driver.add(slave);
+    driver.add(master);
+    driver.add(emcy);
+    // Boot-up message (7.2.8.3.3) and, once 1017h is set, heartbeats.
+    slave.start(canopen::SteadyClock::now());
+    driver.poke();
     driver.on_frames([&log, prefix](std::span<const canopen::can::Frame> frames) {
       if (log.enabled(gateway::LogLevel::Debug)) {
         for (const auto& f : frames) log.debug(prefix + " rx " + canopen::can::to_string(f));
@@ -85,10 +133,6 @@ int run(const gateway::CliOptions& opts) {
       log.flush();  // rare and important: never left waiting in the buffer
     });
     if (ch.state() == canopen::can::BusState::Down) log.warn(prefix + " is down; waiting for it to come up");
-    // Boot-up: COB-ID 700h + node-ID, one data byte 00h.
-    const auto bootup = canopen::can::Frame::standard(0x700U + static_cast<unsigned>(opts.node_id), {0x00});
-    ch.send(bootup);
-    log.debug(prefix + " tx " + canopen::can::to_string(bootup));
   }
   log.info("canopen-gateway started on " + std::to_string(channels.size()) + " network(s), node-ID " +
            std::to_string(opts.node_id));

@@ -1,12 +1,14 @@
 // Fuzzes the decoding side of issue 4's services with arbitrary frames and
-// time steps: NMT master (boot-up, heartbeat consumer, node guarding), EMCY,
-// SYNC and TIME consumers. Invariants: the master only ever sends node
+// time steps: PDO receiver (node 5 described by the shipped CiA 401 EDS),
+// NMT master (boot-up, heartbeat consumer, node guarding), EMCY, SYNC and
+// TIME consumers. Invariants: the master only ever sends node
 // guarding RTRs for the guarded node; events name nodes 1..127; a node is
 // reported lost only if it is monitored: a heartbeat-consumed node only
 // after it was heard (monitoring starts with the first heartbeat), a guarded
 // node also when it never answered the polls; nothing crashes, leaks or
-// hits UB.
-// fuzz-libs: canopen_nmt canopen_emcy
+// hits UB. A decoded PDO never carries more values than its mapping has
+// entries, and claimed PDOs name node 5.
+// fuzz-libs: canopen_nmt canopen_emcy canopen_pdo
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -16,7 +18,9 @@
 #include "canopen/emcy/sync.hpp"
 #include "canopen/emcy/time.hpp"
 #include "canopen/nmt/master.hpp"
+#include "canopen/eds/eds.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
+#include "canopen/pdo/receiver.hpp"
 
 namespace {
 
@@ -30,6 +34,12 @@ const canopen::od::ObjectDictionary& dictionary() {
     (void)d.set(0x1007, 0, canopen::Value::of_unsigned(canopen::DataType::Unsigned32, 5000));         // SYNC window
     return d;
   }();
+  return od;
+}
+
+const canopen::od::ObjectDictionary& io_module() {
+  static const canopen::od::ObjectDictionary od =
+      canopen::eds::load_device_description(CANOPEN_SOURCE_DIR "/deploy/eds/cia401-io-module.eds", 5).od;
   return od;
 }
 
@@ -69,6 +79,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (e.description.empty()) bad = true;
   });
   canopen::emcy::SyncConsumer sync(dictionary(), [](const canopen::SyncEvent&) {});
+  canopen::pdo::PdoReceiver pdo([](const canopen::can::Frame&) {}, [&](canopen::PdoEvent e) {
+    if (e.node != 0 && e.node != 5) bad = true;
+    if (e.values.size() > 64) bad = true;
+  });
+  (void)pdo.add_node(5, io_module());
+  pdo.set_sync_window([&sync](canopen::TimePoint t) { return sync.in_sync_window(t); });
   canopen::emcy::TimeConsumer time(dictionary(), [](const canopen::TimeEvent&) {});
 
   for (std::size_t i = 0; i + 11 <= size; i += 11) {
@@ -84,6 +100,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     f.set(canopen::can::FrameFlag::Remote, (sel & 3) == 2);
     std::memcpy(f.data.data(), data + i + 3, 8);
     master.on_frame(f, now);
+    pdo.on_frame(f, now);
     emcy.on_frame(f, now);
     sync.on_frame(f, now);
     time.on_frame(f, now);
