@@ -9,7 +9,7 @@ namespace {
 
 // Flags of the contract that later parts of the gateway implement. Until
 // they do, they are refused rather than silently ignored.
-const std::set<std::string> kNotYetSupported = {"--config", "--eds", "--mqtt", "--mqtt-format",
+const std::set<std::string> kNotYetSupported = {"--config", "--mqtt", "--mqtt-format",
                                                 "--http", "--gateway-id", "--demo"};
 
 int parse_int(const std::string& flag, const std::string& v) {
@@ -64,6 +64,21 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
       const int n = parse_int(flag, v);
       if (n < 1 || n > 127) throw UsageError("--node-id: " + v + " is out of range 1..127");
       o.node_id = n;
+    } else if (flag == "--eds") {
+      const std::string v = take_value();
+      const auto eq = v.find('=');
+      if (eq == std::string::npos) throw UsageError("--eds: '" + v + "' is not NODE=FILE");
+      const std::string node_text = v.substr(0, eq);
+      int n = 0;
+      auto [p, ec] = std::from_chars(node_text.data(), node_text.data() + node_text.size(), n);
+      if (ec != std::errc() || p != node_text.data() + node_text.size())
+        throw UsageError("--eds: node '" + node_text + "' is not a number");
+      if (n < 1 || n > 127) throw UsageError("--eds: node " + node_text + " is out of range 1..127");
+      if (eq + 1 == v.size()) throw UsageError("--eds: no file given for node " + node_text);
+      for (const auto& e : o.eds) {
+        if (e.node == n) throw UsageError("--eds: node " + node_text + " given twice");
+      }
+      o.eds.push_back({n, v.substr(eq + 1)});
     } else if (flag == "--log-level") {
       const std::string v = take_value();
       auto l = parse_log_level(v);

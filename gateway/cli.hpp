@@ -9,9 +9,17 @@
 
 namespace gateway {
 
+// One --eds NODE=FILE: the EDS/DCF describing remote node NODE (on every network).
+struct EdsOption {
+  int node = 0;
+  std::string file;
+  friend bool operator==(const EdsOption&, const EdsOption&) = default;
+};
+
 struct CliOptions {
   std::vector<std::string> can_interfaces;  // one network each, numbered from 1
   int node_id = 127;                        // the gateway's own CANopen node-ID
+  std::vector<EdsOption> eds;               // in command-line order, one per node
   LogLevel log_level = LogLevel::Info;
   bool help = false;
   bool version = false;

@@ -7,6 +7,7 @@
 #include <csignal>
 #include <cstdio>
 #include <deque>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -14,10 +15,12 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 
+#include "canopen/eds/eds.hpp"
 #include "canopen/emcy/emcy.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
+#include "canopen/pdo/receiver.hpp"
 #include "canopen/sdo/server.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/service_driver.hpp"
@@ -39,8 +42,59 @@ std::string stats_line(const canopen::can::Channel& ch) {
          std::to_string(s.reopens);
 }
 
+// "node 5 TPDO1 6041h/00 Statusword=7 ..." for a decoded PDO; raw hex for an
+// unclaimed one or when the mapping did not fit.
+std::string pdo_text(const canopen::PdoEvent& ev) {
+  char buf[48];
+  std::string s;
+  if (ev.node == 0) {
+    std::snprintf(buf, sizeof buf, "unclaimed PDO %03Xh", static_cast<unsigned>(ev.cob_id));
+    s = buf;
+  } else {
+    s = "node " + std::to_string(ev.node) + " TPDO" + std::to_string(ev.number);
+  }
+  for (const auto& v : ev.values) {
+    std::snprintf(buf, sizeof buf, " %04Xh/%02X ", static_cast<unsigned>(v.index), static_cast<unsigned>(v.sub));
+    s += buf + v.name + "=" + canopen::format_value(v.value);
+  }
+  if (ev.values.empty() || ev.error) {
+    s += " raw ";
+    for (auto b : ev.raw) {
+      std::snprintf(buf, sizeof buf, "%02X", static_cast<unsigned>(b));
+      s += buf;
+    }
+  }
+  if (ev.error) s += " (" + *ev.error + ")";
+  return s;
+}
+
+// 1016h as raw entries, to notice an SDO write to it (see below).
+std::map<std::uint8_t, canopen::Value> consumer_entries(const canopen::od::ObjectDictionary& od) {
+  std::map<std::uint8_t, canopen::Value> out;
+  if (const auto* obj = od.find(0x1016)) {
+    for (const auto& [sub, e] : obj->subs) out.emplace(sub, e.value);
+  }
+  return out;
+}
+
 int run(const gateway::CliOptions& opts) {
   gateway::Logger log(opts.log_level);
+
+  // Device descriptions of the remote nodes, loaded before anything opens so
+  // a bad file is a configuration error (exit 2) naming file and line.
+  std::vector<std::pair<std::uint8_t, canopen::od::ObjectDictionary>> remote_nodes;
+  for (const auto& e : opts.eds) {
+    const auto node = static_cast<std::uint8_t>(e.node);
+    try {
+      auto desc = canopen::eds::load_device_description(e.file, node);
+      for (const auto& w : desc.warnings) log.debug("node " + std::to_string(node) + " EDS: " + w);
+      remote_nodes.emplace_back(node, std::move(desc.od));
+    } catch (const canopen::eds::EdsError& err) {
+      print_error(err.what());
+      return kExitUsage;
+    }
+  }
+
   boost::asio::io_context io;
   auto monitor = canopen::socketcan::LinkMonitor::create(io);
   std::vector<std::shared_ptr<canopen::socketcan::SocketCanChannel>> channels;
@@ -63,6 +117,7 @@ int run(const gateway::CliOptions& opts) {
   std::deque<canopen::nmt::NmtSlave> nmt_slaves;
   std::deque<canopen::nmt::NmtMaster> nmt_masters;
   std::deque<canopen::emcy::EmcyConsumer> emcy_consumers;
+  std::deque<canopen::pdo::PdoReceiver> pdo_receivers;
   std::deque<canopen::socketcan::ServiceDriver> drivers;
 
   for (std::size_t i = 0; i < channels.size(); ++i) {
@@ -107,17 +162,40 @@ int run(const gateway::CliOptions& opts) {
           std::snprintf(code, sizeof code, "%04Xh, error register %02Xh", e.error_code, e.error_register);
           log.warn(prefix + " node " + std::to_string(e.node) + " EMCY " + code + ": " + e.description);
         });
+    auto& pdo = pdo_receivers.emplace_back(sink, [&log, prefix](canopen::PdoEvent ev) {
+      // Unclaimed PDOs are only bus traffic nobody described; decoded ones are the point.
+      const auto level = ev.node == 0 ? gateway::LogLevel::Debug
+                         : ev.error   ? gateway::LogLevel::Warn
+                                      : gateway::LogLevel::Info;
+      if (log.enabled(level)) log.log(level, prefix + " " + pdo_text(ev));
+    });
+    for (const auto& [node, dict] : remote_nodes) {
+      for (const auto& problem : pdo.add_node(node, dict))
+        log.warn(prefix + " node " + std::to_string(node) + " PDO: " + problem);
+    }
+    master.configure_consumers(od);
     auto& driver = drivers.emplace_back(io, ch);
     driver.add(server);
     driver.add(slave);
     driver.add(master);
     driver.add(emcy);
+    driver.add(pdo);
     // Boot-up message (7.2.8.3.3) and, once 1017h is set, heartbeats.
     slave.start(canopen::SteadyClock::now());
     driver.poke();
-    driver.on_frames([&log, prefix](std::span<const canopen::can::Frame> frames) {
+    // 1016h already has a validating write hook (which runs before the value
+    // is stored), so instead of replacing it, compare after each batch: an
+    // SDO write to it arrives as a frame and is applied by then.
+    driver.on_frames([&log, prefix, &od, &master, &driver,
+                      consumers = consumer_entries(od)](std::span<const canopen::can::Frame> frames) mutable {
       if (log.enabled(gateway::LogLevel::Debug)) {
         for (const auto& f : frames) log.debug(prefix + " rx " + canopen::can::to_string(f));
+      }
+      if (auto now_entries = consumer_entries(od); now_entries != consumers) {
+        consumers = std::move(now_entries);
+        master.configure_consumers(od);
+        driver.poke();
+        log.info(prefix + " heartbeat consumers reconfigured from 1016h");
       }
       log.flush();
     });

@@ -108,12 +108,34 @@ TEST(Cli, UnknownOptionIsRejectedAndNamed) {
 }
 
 TEST(Cli, ContractFlagsNotImplementedYetAreRefused) {
-  for (const char* flag : {"--config", "--eds", "--mqtt", "--mqtt-format", "--http", "--gateway-id", "--demo"}) {
+  for (const char* flag : {"--config", "--mqtt", "--mqtt-format", "--http", "--gateway-id", "--demo"}) {
     const std::string msg = usage_error({"--can", "can0", flag, "x"});
     EXPECT_THAT(msg, HasSubstr(flag));
     EXPECT_THAT(msg, HasSubstr("not supported"));
   }
   EXPECT_THAT(usage_error({"--can", "can0", "--http=127.0.0.1:8080"}), HasSubstr("--http"));
+}
+
+TEST(Cli, EdsRepeatsAsNodeEqualsFile) {
+  const CliOptions o = parse_cli({"--can", "can0", "--eds", "5=drive.eds", "--eds=7=dir/io=x.dcf"});
+  EXPECT_EQ(o.eds, (std::vector<EdsOption>{{5, "drive.eds"}, {7, "dir/io=x.dcf"}}));
+  EXPECT_TRUE(parse_cli({"--can", "can0"}).eds.empty());
+  EXPECT_EQ(parse_cli({"--can", "can0", "--eds", "1=a", "--eds", "127=b"}).eds.size(), 2U);
+}
+
+TEST(Cli, EdsNodeEqualsFileErrorsAreNamed) {
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "drive.eds"}), HasSubstr("not NODE=FILE"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "x=drive.eds"}), HasSubstr("'x' is not a number"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "=drive.eds"}), HasSubstr("is not a number"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "0=drive.eds"}), HasSubstr("out of range 1..127"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "128=drive.eds"}), HasSubstr("out of range 1..127"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "5="}), HasSubstr("no file given for node 5"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds", "5=a", "--eds", "5=b"}), HasSubstr("node 5 given twice"));
+  EXPECT_THAT(usage_error({"--can", "can0", "--eds"}), HasSubstr("--eds: missing value"));
+  for (const auto& msg : {usage_error({"--can", "can0", "--eds", "0x5=a"}), usage_error({"--eds", "5"})}) {
+    EXPECT_THAT(msg, HasSubstr("--eds"));
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+  }
 }
 
 TEST(Cli, UsageErrorIsOneLine) {

@@ -1,0 +1,210 @@
+// device_tool: a CANopen device built from the stack over real SocketCAN, for
+// the system tests (the gateway as NMT master on one side of a vcan bus, this
+// process as a remote node on the other).
+//
+//   device_tool IFACE NODE EDSFILE [--heartbeat MS] [--emcy-after MS CODE] [--tpdo-period MS]
+//
+// The object dictionary comes from EDSFILE (with $NODEID = NODE). It sends
+// its boot-up message, heartbeats every MS (1017h), serves SDO, raises EMCY
+// CODE once MS after start, and every --tpdo-period increments the first
+// integer mapped into TPDO 1 so the event-driven TPDO goes out, but only
+// while operational (CiA 301 7.3.2.2.5: PDOs only in that state).
+// Prints "ready", NMT state changes, "emcy CODE" and "tpdo VALUE" on stdout.
+// SIGINT/SIGTERM: exit 0.
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include <charconv>
+#include <chrono>
+#include <cstdio>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "canopen/eds/eds.hpp"
+#include "canopen/emcy/emcy.hpp"
+#include "canopen/nmt/slave.hpp"
+#include "canopen/pdo/transmitter.hpp"
+#include "canopen/sdo/server.hpp"
+#include "canopen/socketcan/channel.hpp"
+#include "canopen/socketcan/service_driver.hpp"
+
+namespace {
+
+using namespace std::chrono_literals;
+
+unsigned long parse_number(const std::string& s) {
+  int base = 10;
+  std::string_view v = s;
+  if (v.starts_with("0x") || v.starts_with("0X")) {
+    base = 16;
+    v.remove_prefix(2);
+  }
+  unsigned long out = 0;
+  auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), out, base);
+  if (v.empty() || ec != std::errc() || p != v.data() + v.size()) throw std::invalid_argument("bad number '" + s + "'");
+  return out;
+}
+
+// EmcyProducer has no receive side; ServiceDriver wants the full shape.
+struct EmcyService {
+  canopen::emcy::EmcyProducer& producer;
+  void on_frame(const canopen::can::Frame&, canopen::TimePoint) {}
+  void on_time(canopen::TimePoint now) { producer.on_time(now); }
+  canopen::TimePoint next_deadline() const { return producer.next_deadline(); }
+};
+
+// The first integer object mapped into TPDO 1 (1A00h), if any.
+std::optional<std::pair<std::uint16_t, std::uint8_t>> first_mapped_integer(const canopen::od::ObjectDictionary& od) {
+  const auto count = od.get_unsigned(0x1A00, 0).value_or(0);
+  for (std::uint8_t i = 1; i <= count && i != 0; ++i) {
+    const auto entry = od.get_unsigned(0x1A00, i).value_or(0);
+    const auto index = static_cast<std::uint16_t>(entry >> 16);
+    const auto sub = static_cast<std::uint8_t>((entry >> 8) & 0xFF);
+    auto v = od.get(index, sub);
+    if (v && (canopen::is_signed_integer(v->type) || canopen::is_unsigned_integer(v->type))) {
+      return std::pair{index, sub};
+    }
+  }
+  return std::nullopt;
+}
+
+// v + 1, wrapping within its type.
+canopen::Value incremented(const canopen::Value& v) {
+  if (const auto* u = std::get_if<std::uint64_t>(&v.data)) {
+    return canopen::Value::of_unsigned(v.type, *u >= canopen::unsigned_max(v.type) ? 0 : *u + 1);
+  }
+  const auto s = std::get<std::int64_t>(v.data);
+  return canopen::Value::of_signed(v.type, s >= canopen::signed_max(v.type) ? canopen::signed_min(v.type) : s + 1);
+}
+
+void say(const std::string& line) {
+  std::printf("%s\n", line.c_str());
+  std::fflush(stdout);
+}
+
+int run(const std::vector<std::string>& a) {
+  if (a.size() < 3) throw std::invalid_argument("usage: device_tool IFACE NODE EDSFILE [--heartbeat MS] "
+                                                "[--emcy-after MS CODE] [--tpdo-period MS]");
+  const std::string iface = a[0];
+  const auto node_number = parse_number(a[1]);
+  if (node_number < 1 || node_number > 127) throw std::invalid_argument("NODE must be 1..127");
+  const auto node = static_cast<std::uint8_t>(node_number);
+  std::optional<unsigned long> heartbeat_ms, emcy_after_ms, tpdo_period_ms;
+  std::uint16_t emcy_code = 0;
+  for (std::size_t i = 3; i < a.size(); ++i) {
+    auto value = [&]() -> unsigned long {
+      if (i + 1 >= a.size()) throw std::invalid_argument(a[i] + ": missing value");
+      return parse_number(a[++i]);
+    };
+    if (a[i] == "--heartbeat") {
+      heartbeat_ms = value();
+    } else if (a[i] == "--emcy-after") {
+      emcy_after_ms = value();
+      emcy_code = static_cast<std::uint16_t>(value());
+    } else if (a[i] == "--tpdo-period") {
+      tpdo_period_ms = value();
+    } else {
+      throw std::invalid_argument("unknown option " + a[i]);
+    }
+  }
+
+  auto desc = canopen::eds::load_device_description(a[2], node);
+  auto& od = desc.od;
+  if (heartbeat_ms) {
+    // Set before start(): the slave reads 1017h during its initialisation.
+    if (auto ec = od.set(0x1017, 0, canopen::Value::of_unsigned(canopen::DataType::Unsigned16, *heartbeat_ms)))
+      throw std::runtime_error("cannot set 1017h: " + ec.message());
+  }
+
+  boost::asio::io_context io;
+  auto monitor = canopen::socketcan::LinkMonitor::create(io);
+  auto channel = canopen::socketcan::SocketCanChannel::open(io, iface, monitor);
+  auto sink = [&channel](const canopen::can::Frame& f) { channel->send(f); };
+
+  canopen::sdo::ServerConfig sdo_cfg;
+  sdo_cfg.node_id = node;
+  canopen::sdo::SdoServer server(od, sdo_cfg, sink);
+  canopen::nmt::NmtSlave slave(
+      od, node, sink,
+      canopen::nmt::SlaveCallbacks{{}, {},
+                                   [](canopen::NmtState now, canopen::NmtState) {
+                                     say("state " + std::string(canopen::to_string(now)));
+                                   },
+                                   {}});
+  canopen::emcy::EmcyProducer emcy(od, sink);
+  EmcyService emcy_service{emcy};
+  canopen::pdo::PdoTransmitter tpdos(sink);
+  const auto start = canopen::SteadyClock::now();
+  if (auto r = tpdos.add_from(node, canopen::pdo::Direction::Transmit, 1, od, start); !r)
+    throw std::runtime_error("TPDO 1: " + r.error().code.message() + " " + r.error().detail);
+  const auto counter = first_mapped_integer(od);
+
+  canopen::socketcan::ServiceDriver driver(io, *channel);
+  driver.add(server);
+  driver.add(slave);
+  driver.add(emcy_service);
+  driver.add(tpdos);
+  slave.start(start);  // boot-up (7.2.8.3.3), then heartbeats
+  driver.poke();
+
+  boost::asio::steady_timer emcy_timer(io);
+  if (emcy_after_ms) {
+    emcy_timer.expires_after(std::chrono::milliseconds(*emcy_after_ms));
+    emcy_timer.async_wait([&](const boost::system::error_code& ec) {
+      if (ec) return;
+      char code[8];
+      std::snprintf(code, sizeof code, "%04X", emcy_code);
+      if (emcy.raise(emcy_code, 0, canopen::SteadyClock::now())) say(std::string("emcy ") + code);
+      driver.poke();
+    });
+  }
+
+  boost::asio::steady_timer tpdo_timer(io);
+  std::function<void()> tpdo_tick = [&] {
+    tpdo_timer.expires_after(std::chrono::milliseconds(*tpdo_period_ms));
+    tpdo_timer.async_wait([&](const boost::system::error_code& ec) {
+      if (ec) return;
+      if (counter && slave.service_active(canopen::nmt::Service::Pdo)) {
+        const auto now = canopen::SteadyClock::now();
+        const auto [index, sub] = *counter;
+        if (auto v = od.get(index, sub)) {
+          const auto next = incremented(*v);
+          od.set(index, sub, next);
+          if (!tpdos.set_value(node, 1, index, sub, next, now)) say("tpdo " + canopen::format_value(next));
+          driver.poke();
+        }
+      }
+      tpdo_tick();
+    });
+  };
+  if (tpdo_period_ms && *tpdo_period_ms > 0) tpdo_tick();
+
+  boost::asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](const boost::system::error_code&, int) {
+    emcy_timer.cancel();
+    tpdo_timer.cancel();
+    driver.remove(&server);
+    driver.remove(&slave);
+    driver.remove(&emcy_service);
+    driver.remove(&tpdos);
+    channel->close();
+    monitor->stop();
+  });
+  say("ready");
+  io.run();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(std::vector<std::string>(argv + 1, argv + argc));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "device_tool: %s\n", e.what());
+    return 2;
+  }
+}
