@@ -26,23 +26,13 @@
 #include "canopen/sdo/server.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/service_driver.hpp"
+#include "tool_support.hpp"
 
 namespace {
 
 using canopen::Bytes;
 
-unsigned long parse_number(const std::string& s) {
-  int base = 10;
-  std::string_view v = s;
-  if (v.starts_with("0x") || v.starts_with("0X")) {
-    base = 16;
-    v.remove_prefix(2);
-  }
-  unsigned long out = 0;
-  auto [p, ec] = std::from_chars(v.data(), v.data() + v.size(), out, base);
-  if (ec != std::errc() || p != v.data() + v.size()) throw std::invalid_argument("bad number '" + s + "'");
-  return out;
-}
+using canopen::tools::parse_number;
 
 Bytes from_hex(const std::string& hex) {
   if (hex.size() % 2 != 0) throw std::invalid_argument("odd number of hex digits");
