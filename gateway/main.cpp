@@ -7,7 +7,6 @@
 #include <csignal>
 #include <cstdio>
 #include <deque>
-#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -66,15 +65,6 @@ std::string pdo_text(const canopen::PdoEvent& ev) {
   }
   if (ev.error) s += " (" + *ev.error + ")";
   return s;
-}
-
-// 1016h as raw entries, to notice an SDO write to it (see below).
-std::map<std::uint8_t, canopen::Value> consumer_entries(const canopen::od::ObjectDictionary& od) {
-  std::map<std::uint8_t, canopen::Value> out;
-  if (const auto* obj = od.find(0x1016)) {
-    for (const auto& [sub, e] : obj->subs) out.emplace(sub, e.value);
-  }
-  return out;
 }
 
 int run(const gateway::CliOptions& opts) {
@@ -183,19 +173,15 @@ int run(const gateway::CliOptions& opts) {
     // Boot-up message (7.2.8.3.3) and, once 1017h is set, heartbeats.
     slave.start(canopen::SteadyClock::now());
     driver.poke();
-    // 1016h already has a validating write hook (which runs before the value
-    // is stored), so instead of replacing it, compare after each batch: an
-    // SDO write to it arrives as a frame and is applied by then.
-    driver.on_frames([&log, prefix, &od, &master, &driver,
-                      consumers = consumer_entries(od)](std::span<const canopen::can::Frame> frames) mutable {
+    // A write to 1016h (e.g. over SDO) changes which heartbeats are consumed.
+    od.observe(0x1016, [&log, prefix, &od, &master, &driver](std::uint8_t) {
+      master.configure_consumers(od);
+      driver.poke();
+      log.info(prefix + " heartbeat consumers reconfigured from 1016h");
+    });
+    driver.on_frames([&log, prefix](std::span<const canopen::can::Frame> frames) {
       if (log.enabled(gateway::LogLevel::Debug)) {
         for (const auto& f : frames) log.debug(prefix + " rx " + canopen::can::to_string(f));
-      }
-      if (auto now_entries = consumer_entries(od); now_entries != consumers) {
-        consumers = std::move(now_entries);
-        master.configure_consumers(od);
-        driver.poke();
-        log.info(prefix + " heartbeat consumers reconfigured from 1016h");
       }
       log.flush();
     });

@@ -146,7 +146,10 @@ std::error_code ObjectDictionary::write(std::uint16_t index, std::uint8_t sub, s
     if (auto ec = hook(*this, *entry, value)) return ec;
   }
   entry = find(index, sub);
-  if (entry != nullptr) entry->value = std::move(value);
+  if (entry != nullptr) {
+    entry->value = std::move(value);
+    notify(index, sub);
+  }
   return {};
 }
 
@@ -172,7 +175,17 @@ std::error_code ObjectDictionary::set(std::uint16_t index, std::uint8_t sub, Val
   if (entry == nullptr) return err(find(index) == nullptr ? SdoAbort::NoSuchObject : SdoAbort::NoSuchSubIndex);
   if (v.type != entry->type || !holds_its_type(v)) return err(SdoAbort::LengthMismatch);
   entry->value = std::move(v);
+  notify(index, sub);
   return {};
+}
+
+void ObjectDictionary::observe(std::uint16_t index, Observer observer) {
+  observers_.emplace(index, std::move(observer));
+}
+
+void ObjectDictionary::notify(std::uint16_t index, std::uint8_t sub) const {
+  auto [first, last] = observers_.equal_range(index);
+  for (auto it = first; it != last; ++it) it->second(sub);
 }
 
 std::optional<std::uint64_t> ObjectDictionary::get_unsigned(std::uint16_t index, std::uint8_t sub) const {

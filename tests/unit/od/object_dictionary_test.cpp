@@ -578,5 +578,39 @@ TEST(ObjectDictionaryLocal, GetUnsignedOnlyForUnsignedEntries) {
   EXPECT_EQ(od.get_unsigned(0x3000, 0), std::nullopt);
 }
 
+TEST(ObjectDictionaryObservers, RunAfterAStoredWriteOnlyAndInOrder) {
+  ObjectDictionary od;
+  od.insert(make_array(0x1016, "consumer heartbeat time", DataType::Unsigned32, Access::ReadWrite, 2));
+  od.on_write(0x1016, [](SubEntry&, const Value& v) -> std::error_code {
+    // Refuse 0xFFFFFFFF; observers must not hear about refused writes.
+    return std::get<std::uint64_t>(v.data) == 0xFFFFFFFFU ? make_error_code(SdoAbort::InvalidValue) : std::error_code{};
+  });
+  std::vector<std::string> calls;
+  od.observe(0x1016, [&](std::uint8_t sub) {
+    // The new value is already stored when an observer runs.
+    calls.push_back("a" + std::to_string(sub) + "=" + std::to_string(*od.get_unsigned(0x1016, sub)));
+  });
+  od.observe(0x1016, [&](std::uint8_t sub) { calls.push_back("b" + std::to_string(sub)); });
+
+  const std::uint8_t ok[] = {0x2C, 0x01, 0x05, 0x00};
+  ASSERT_FALSE(od.write(0x1016, 1, ok));
+  const std::uint8_t refused[] = {0xFF, 0xFF, 0xFF, 0xFF};
+  EXPECT_EQ(od.write(0x1016, 2, refused), make_error_code(SdoAbort::InvalidValue));
+  ASSERT_FALSE(od.set(0x1016, 2, Value::of_unsigned(DataType::Unsigned32, 7)));
+  EXPECT_EQ(calls, (std::vector<std::string>{"a1=327980", "b1", "a2=7", "b2"}));
+}
+
+TEST(ObjectDictionaryObservers, OtherIndexesAreNotObserved) {
+  ObjectDictionary od;
+  od.insert(make_var(0x1017, "producer heartbeat time", DataType::Unsigned16, Access::ReadWrite,
+                     Value::of_unsigned(DataType::Unsigned16, 0)));
+  od.insert(make_var(0x1006, "cycle period", DataType::Unsigned32, Access::ReadWrite,
+                     Value::of_unsigned(DataType::Unsigned32, 0)));
+  int calls = 0;
+  od.observe(0x1017, [&](std::uint8_t) { ++calls; });
+  ASSERT_FALSE(od.set(0x1006, 0, Value::of_unsigned(DataType::Unsigned32, 1000)));
+  EXPECT_EQ(calls, 0);
+}
+
 }  // namespace
 }  // namespace canopen::od

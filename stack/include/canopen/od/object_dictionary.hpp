@@ -108,6 +108,13 @@ class ObjectDictionary {
   std::error_code set(std::uint16_t index, std::uint8_t sub, Value v);
   std::optional<std::uint64_t> get_unsigned(std::uint16_t index, std::uint8_t sub) const;
 
+  // Observers run after a value of the index has changed through write() or
+  // set() (hooks run before, and may refuse; observers only learn). Any
+  // number per index, called in the order added, with the sub-index. They
+  // must not add or remove observers of the same dictionary.
+  using Observer = std::function<void(std::uint8_t sub)>;
+  void observe(std::uint16_t index, Observer observer);
+
   // Hooks apply to every sub-entry of the index; one of each kind per index.
   void on_read(std::uint16_t index, ReadHook hook);
   void on_write(std::uint16_t index, WriteHook hook);
@@ -119,6 +126,8 @@ class ObjectDictionary {
 
  private:
   std::map<std::uint16_t, Object> objects_;
+  void notify(std::uint16_t index, std::uint8_t sub) const;
+  std::multimap<std::uint16_t, Observer> observers_;
   std::map<std::uint16_t, ReadHook> read_hooks_;
   std::map<std::uint16_t, WriteHook> write_hooks_;
   std::map<std::uint16_t, DictReadHook> dict_read_hooks_;
