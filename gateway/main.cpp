@@ -15,11 +15,9 @@
 #include <boost/asio/signal_set.hpp>
 
 #include "canopen/eds/eds.hpp"
-#include "canopen/emcy/emcy.hpp"
-#include "canopen/nmt/master.hpp"
+#include "canopen/network.hpp"
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
-#include "canopen/pdo/receiver.hpp"
 #include "canopen/sdo/server.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/service_driver.hpp"
@@ -105,9 +103,7 @@ int run(const gateway::CliOptions& opts) {
   std::deque<canopen::od::ObjectDictionary> dictionaries;
   std::deque<canopen::sdo::SdoServer> sdo_servers;
   std::deque<canopen::nmt::NmtSlave> nmt_slaves;
-  std::deque<canopen::nmt::NmtMaster> nmt_masters;
-  std::deque<canopen::emcy::EmcyConsumer> emcy_consumers;
-  std::deque<canopen::pdo::PdoReceiver> pdo_receivers;
+  std::deque<canopen::Network> networks;
   std::deque<canopen::socketcan::ServiceDriver> drivers;
 
   for (std::size_t i = 0; i < channels.size(); ++i) {
@@ -129,53 +125,46 @@ int run(const gateway::CliOptions& opts) {
               log.flush();
             },
             {}});
-    auto& master = nmt_masters.emplace_back(
-        sink, [&log, prefix](const canopen::EventBody& body, canopen::can::Frame::Clock::time_point) {
-          if (const auto* s = std::get_if<canopen::NodeStateEvent>(&body)) {
-            static constexpr const char* kCause[] = {"boot-up", "heartbeat", "node guarding", "lost", "recovered"};
-            std::string msg = prefix + " node " + std::to_string(s->node) + " " +
-                              (s->state ? std::string(canopen::to_string(*s->state)) : std::string("lost")) + " (" +
-                              kCause[static_cast<int>(s->cause)] + ")";
-            log.log(s->cause == canopen::NodeStateEvent::Cause::Lost ? gateway::LogLevel::Warn
-                                                                      : gateway::LogLevel::Info,
-                    msg);
-            log.flush();  // may come from a timer (lost), not only from a frame batch
-          } else if (const auto* h = std::get_if<canopen::HeartbeatEvent>(&body)) {
-            if (log.enabled(gateway::LogLevel::Trace))
-              log.trace(prefix + " node " + std::to_string(h->node) + " heartbeat " +
-                        std::string(canopen::to_string(h->state)));
-          }
-        });
-    auto& emcy = emcy_consumers.emplace_back(
-        canopen::emcy::EmcyConsumerConfig{}, [&log, prefix](const canopen::EmcyEvent& e) {
-          char code[32];
-          std::snprintf(code, sizeof code, "%04Xh, error register %02Xh", e.error_code, e.error_register);
-          log.warn(prefix + " node " + std::to_string(e.node) + " EMCY " + code + ": " + e.description);
-        });
-    auto& pdo = pdo_receivers.emplace_back(sink, [&log, prefix](canopen::PdoEvent ev) {
-      // Unclaimed PDOs are only bus traffic nobody described; decoded ones are the point.
-      const auto level = ev.node == 0 ? gateway::LogLevel::Debug
-                         : ev.error   ? gateway::LogLevel::Warn
-                                      : gateway::LogLevel::Info;
-      if (log.enabled(level)) log.log(level, prefix + " " + pdo_text(ev));
+    // The other nodes: one numbered event stream per network (seq, timestamp).
+    auto& network = networks.emplace_back(od, sink, [&log, prefix](const canopen::Event& ev) {
+      if (const auto* s = std::get_if<canopen::NodeStateEvent>(&ev.body)) {
+        static constexpr const char* kCause[] = {"boot-up", "heartbeat", "node guarding", "lost", "recovered"};
+        std::string msg = prefix + " node " + std::to_string(s->node) + " " +
+                          (s->state ? std::string(canopen::to_string(*s->state)) : std::string("lost")) + " (" +
+                          kCause[static_cast<int>(s->cause)] + ")";
+        log.log(s->cause == canopen::NodeStateEvent::Cause::Lost ? gateway::LogLevel::Warn : gateway::LogLevel::Info,
+                msg);
+        log.flush();  // may come from a timer (lost), not only from a frame batch
+      } else if (const auto* h = std::get_if<canopen::HeartbeatEvent>(&ev.body)) {
+        if (log.enabled(gateway::LogLevel::Trace))
+          log.trace(prefix + " node " + std::to_string(h->node) + " heartbeat " +
+                    std::string(canopen::to_string(h->state)));
+      } else if (const auto* e = std::get_if<canopen::EmcyEvent>(&ev.body)) {
+        char code[32];
+        std::snprintf(code, sizeof code, "%04Xh, error register %02Xh", e->error_code, e->error_register);
+        log.warn(prefix + " node " + std::to_string(e->node) + " EMCY " + code + ": " + e->description);
+      } else if (const auto* p = std::get_if<canopen::PdoEvent>(&ev.body)) {
+        // Unclaimed PDOs are only bus traffic nobody described; decoded ones are the point.
+        const auto level = p->node == 0 ? gateway::LogLevel::Debug
+                           : p->error   ? gateway::LogLevel::Warn
+                                        : gateway::LogLevel::Info;
+        if (log.enabled(level)) log.log(level, prefix + " " + pdo_text(*p));
+      }
     });
     for (const auto& [node, dict] : remote_nodes) {
-      for (const auto& problem : pdo.add_node(node, dict))
+      for (const auto& problem : network.add_node(node, dict))
         log.warn(prefix + " node " + std::to_string(node) + " PDO: " + problem);
     }
-    master.configure_consumers(od);
     auto& driver = drivers.emplace_back(io, ch);
     driver.add(server);
     driver.add(slave);
-    driver.add(master);
-    driver.add(emcy);
-    driver.add(pdo);
+    driver.add(network);
     // Boot-up message (7.2.8.3.3) and, once 1017h is set, heartbeats.
     slave.start(canopen::SteadyClock::now());
     driver.poke();
     // A write to 1016h (e.g. over SDO) changes which heartbeats are consumed.
-    od.observe(0x1016, [&log, prefix, &od, &master, &driver](std::uint8_t) {
-      master.configure_consumers(od);
+    od.observe(0x1016, [&log, prefix, &network, &driver](std::uint8_t) {
+      network.configure_heartbeat_consumers();
       driver.poke();
       log.info(prefix + " heartbeat consumers reconfigured from 1016h");
     });
@@ -185,7 +174,8 @@ int run(const gateway::CliOptions& opts) {
       }
       log.flush();
     });
-    ch.on_bus_event([&log, prefix](const canopen::can::BusEvent& ev) {
+    ch.on_bus_event([&log, prefix, &network](const canopen::can::BusEvent& ev) {
+      network.report(ev);  // bus changes are part of the network's event sequence
       std::string msg = prefix + " bus " + std::string(canopen::can::to_string(ev.previous)) + " -> " +
                         std::string(canopen::can::to_string(ev.state)) + " (" +
                         std::string(canopen::can::to_string(ev.cause));

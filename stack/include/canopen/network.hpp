@@ -1,0 +1,82 @@
+// One CAN network seen from the gateway (the NMT master side): the services
+// that watch and talk to the other nodes, fed as one sans-I/O unit, and one
+// ordered event stream in which every event carries a per-network sequence
+// number (+1 per event, so a consumer sees gaps) and a timestamp: the
+// receive time of the frame that caused it, or the wall time for events a
+// timer caused (a node lost).
+//
+// Services: NMT master (node tracking, heartbeat consumer, node guarding),
+// SDO client, PDO receiver, EMCY, SYNC and TIME consumers.
+//
+// The caller MUST pass every received frame to on_frame(), call on_time()
+// when now >= next_deadline() (re-read it after any call), and pass bus
+// events to report(). Not thread-safe; handlers run synchronously inside
+// those calls.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "canopen/emcy/emcy.hpp"
+#include "canopen/emcy/sync.hpp"
+#include "canopen/emcy/time.hpp"
+#include "canopen/events.hpp"
+#include "canopen/nmt/master.hpp"
+#include "canopen/od/object_dictionary.hpp"
+#include "canopen/pdo/receiver.hpp"
+#include "canopen/sdo/client.hpp"
+
+namespace canopen {
+
+class Network {
+ public:
+  using FrameSink = std::function<void(const can::Frame&)>;
+  using EventHandler = std::function<void(const Event&)>;
+  using WallClock = std::function<can::Frame::Clock::time_point()>;
+
+  // own: the gateway's dictionary on this network (1016h heartbeat
+  // consumers, 1007h SYNC window, 1012h TIME); it must outlive the network.
+  Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler on_event, sdo::ClientConfig sdo_config = {},
+          WallClock wall = [] { return can::Frame::Clock::now(); });
+  Network(const Network&) = delete;
+  Network& operator=(const Network&) = delete;
+
+  // Describes a remote node (its EDS/DCF dictionary): its TPDOs are decoded.
+  // Returns problems that leave parts undecodable.
+  std::vector<std::string> add_node(std::uint8_t node, const od::ObjectDictionary& description);
+  // Re-reads 1016h of the own dictionary (after it changed).
+  void configure_heartbeat_consumers();
+
+  bool on_frame(const can::Frame& frame, TimePoint now);
+  void on_time(TimePoint now);
+  TimePoint next_deadline() const;
+  // Bus-state changes of the channel join the same sequence.
+  void report(const can::BusEvent& ev);
+
+  nmt::NmtMaster& nmt() { return nmt_; }
+  sdo::SdoClient& sdo() { return sdo_; }
+  pdo::PdoReceiver& pdo() { return pdo_; }
+  std::uint64_t last_seq() const { return seq_; }
+
+ private:
+  void emit(EventBody body, can::Frame::Clock::time_point timestamp);
+
+  const od::ObjectDictionary& own_;
+  EventHandler on_event_;
+  WallClock wall_;
+  std::uint64_t seq_ = 0;
+  // Receive time of the frame being dispatched; consumers that report
+  // without a timestamp get this one.
+  can::Frame::Clock::time_point frame_time_{};
+  nmt::NmtMaster nmt_;
+  sdo::SdoClient sdo_;
+  pdo::PdoReceiver pdo_;
+  emcy::EmcyConsumer emcy_;
+  emcy::SyncConsumer sync_;
+  emcy::TimeConsumer time_;
+};
+
+}  // namespace canopen
