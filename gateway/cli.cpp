@@ -1,16 +1,10 @@
 #include "cli.hpp"
 
 #include <charconv>
-#include <set>
 
 namespace gateway {
 
 namespace {
-
-// Flags of the contract that later parts of the gateway implement. Until
-// they do, they are refused rather than silently ignored.
-const std::set<std::string> kNotYetSupported = {"--config", "--mqtt", "--mqtt-format",
-                                                "--http", "--gateway-id", "--demo"};
 
 int parse_int(const std::string& flag, const std::string& v) {
   int out = 0;
@@ -19,7 +13,39 @@ int parse_int(const std::string& flag, const std::string& v) {
   return out;
 }
 
+// MQTT topic level: no wildcards, no '/', printable.
+bool valid_topic_level(const std::string& s) {
+  if (s.empty() || s.size() > 64) return false;
+  for (unsigned char c : s) {
+    if (c <= 0x20 || c == 0x7F || c == '/' || c == '+' || c == '#') return false;
+  }
+  return true;
+}
+
 }  // namespace
+
+bool split_host_port(const std::string& text, std::string& host, unsigned short& port) {
+  std::string h;
+  std::string p;
+  if (!text.empty() && text.front() == '[') {
+    const auto close = text.find(']');
+    if (close == std::string::npos || close + 1 >= text.size() || text[close + 1] != ':') return false;
+    h = text.substr(1, close - 1);
+    p = text.substr(close + 2);
+  } else {
+    const auto colon = text.rfind(':');
+    if (colon == std::string::npos || text.find(':') != colon) return false;
+    h = text.substr(0, colon);
+    p = text.substr(colon + 1);
+  }
+  if (h.empty() || p.empty()) return false;
+  unsigned value = 0;
+  auto [end, ec] = std::from_chars(p.data(), p.data() + p.size(), value);
+  if (ec != std::errc() || end != p.data() + p.size() || value > 65535) return false;
+  host = h;
+  port = static_cast<unsigned short>(value);
+  return true;
+}
 
 std::string usage_text() {
   return "usage: canopen-gateway [--config FILE] [--can IFACE]... [--node-id N] [--eds NODE=FILE]...\n"
@@ -84,13 +110,40 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
       auto l = parse_log_level(v);
       if (!l) throw UsageError("--log-level: '" + v + "' is not one of trace, debug, info, warn, error");
       o.log_level = *l;
-    } else if (kNotYetSupported.count(flag) != 0) {
-      throw UsageError(flag + ": not supported by this version of canopen-gateway yet");
+    } else if (flag == "--config") {
+      const std::string v = take_value();
+      if (v.empty()) throw UsageError("--config: empty file name");
+      o.config_file = v;
+    } else if (flag == "--mqtt") {
+      const std::string v = take_value();
+      const bool known = v.rfind("tcp://", 0) == 0 || v.rfind("mqtt://", 0) == 0 || v.rfind("ssl://", 0) == 0 ||
+                         v.rfind("mqtts://", 0) == 0 || v.rfind("ws://", 0) == 0 || v.rfind("wss://", 0) == 0;
+      if (!known) throw UsageError("--mqtt: '" + v + "' is not a broker URI (tcp://HOST:PORT, ssl://HOST:PORT, ...)");
+      o.mqtt_uri = v;
+    } else if (flag == "--mqtt-format") {
+      const std::string v = take_value();
+      if (v != "json" && v != "protobuf") throw UsageError("--mqtt-format: '" + v + "' is not json or protobuf");
+      o.mqtt_format = v;
+    } else if (flag == "--http") {
+      const std::string v = take_value();
+      std::string host;
+      unsigned short port = 0;
+      if (!split_host_port(v, host, port)) throw UsageError("--http: '" + v + "' is not ADDR:PORT");
+      o.http = v;
+    } else if (flag == "--gateway-id") {
+      const std::string v = take_value();
+      if (!valid_topic_level(v))
+        throw UsageError("--gateway-id: '" + v + "' cannot be an MQTT topic level (no '/', '+', '#', spaces)");
+      o.gateway_id = v;
+    } else if (flag == "--demo") {
+      no_value();
+      o.demo = true;
     } else {
       throw UsageError("unknown option '" + args[i] + "'");
     }
   }
-  if (!o.help && !o.version && o.can_interfaces.empty()) throw UsageError("no CAN interface given (use --can IFACE)");
+  if (!o.help && !o.version && o.can_interfaces.empty() && !o.config_file && !o.demo)
+    throw UsageError("no CAN interface given (use --can IFACE, --config FILE or --demo)");
   return o;
 }
 

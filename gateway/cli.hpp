@@ -1,6 +1,7 @@
 // Command line of canopen-gateway (../shared/api-contract.md, "Command line").
 #pragma once
 
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -16,14 +17,25 @@ struct EdsOption {
   friend bool operator==(const EdsOption&, const EdsOption&) = default;
 };
 
+// What the command line says; a flag that was not given is empty, so the
+// configuration file's value (or the default) stays (flags win over the file).
 struct CliOptions {
-  std::vector<std::string> can_interfaces;  // one network each, numbered from 1
-  int node_id = 127;                        // the gateway's own CANopen node-ID
-  std::vector<EdsOption> eds;               // in command-line order, one per node
-  LogLevel log_level = LogLevel::Info;
+  std::optional<std::string> config_file;    // --config
+  std::vector<std::string> can_interfaces;   // one network each, numbered from 1
+  std::optional<int> node_id;                // the gateway's own CANopen node-ID (default 127)
+  std::vector<EdsOption> eds;                // in command-line order, one per node
+  std::optional<std::string> mqtt_uri;       // --mqtt: turns MQTT on
+  std::optional<std::string> mqtt_format;    // "json" or "protobuf"
+  std::optional<std::string> http;           // ADDR:PORT, checked
+  std::optional<std::string> gateway_id;     // MQTT topic level, default the host name
+  bool demo = false;                         // add a simulated network
+  std::optional<LogLevel> log_level;
   bool help = false;
   bool version = false;
 };
+
+// "ADDR:PORT" with an IPv4 address, a host name or [IPv6]; false when malformed.
+bool split_host_port(const std::string& text, std::string& host, unsigned short& port);
 
 // Bad command line: what() is one line naming the flag and the reason.
 class UsageError : public std::runtime_error {

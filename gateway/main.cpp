@@ -66,7 +66,7 @@ std::string pdo_text(const canopen::PdoEvent& ev) {
 }
 
 int run(const gateway::CliOptions& opts) {
-  gateway::Logger log(opts.log_level);
+  gateway::Logger log(opts.log_level.value_or(gateway::LogLevel::Info));
 
   // Device descriptions of the remote nodes, loaded before anything opens so
   // a bad file is a configuration error (exit 2) naming file and line.
@@ -110,13 +110,13 @@ int run(const gateway::CliOptions& opts) {
     auto& ch = *channels[i];
     const std::string prefix = "net " + std::to_string(i + 1) + " " + std::string(ch.name());
     auto& od = dictionaries.emplace_back(
-        canopen::od::make_gateway_dictionary(static_cast<std::uint8_t>(opts.node_id), identity));
+        canopen::od::make_gateway_dictionary(static_cast<std::uint8_t>(opts.node_id.value_or(127)), identity));
     canopen::sdo::ServerConfig sdo_cfg;
-    sdo_cfg.node_id = static_cast<std::uint8_t>(opts.node_id);
+    sdo_cfg.node_id = static_cast<std::uint8_t>(opts.node_id.value_or(127));
     auto& server = sdo_servers.emplace_back(od, sdo_cfg, [&ch](const canopen::can::Frame& f) { ch.send(f); });
     auto sink = [&ch](const canopen::can::Frame& f) { ch.send(f); };
     auto& slave = nmt_slaves.emplace_back(
-        od, static_cast<std::uint8_t>(opts.node_id), sink,
+        od, static_cast<std::uint8_t>(opts.node_id.value_or(127)), sink,
         canopen::nmt::SlaveCallbacks{
             {}, {},
             [&log, prefix](canopen::NmtState now_state, canopen::NmtState before) {
@@ -189,7 +189,7 @@ int run(const gateway::CliOptions& opts) {
     if (ch.state() == canopen::can::BusState::Down) log.warn(prefix + " is down; waiting for it to come up");
   }
   log.info("canopen-gateway started on " + std::to_string(channels.size()) + " network(s), node-ID " +
-           std::to_string(opts.node_id));
+           std::to_string(opts.node_id.value_or(127)));
   log.flush();
 
   boost::asio::signal_set signals(io, SIGINT, SIGTERM);

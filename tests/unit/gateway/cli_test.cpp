@@ -27,8 +27,11 @@ std::string usage_error(const std::vector<std::string>& args) {
 TEST(Cli, SingleCanInterfaceWithDefaults) {
   const CliOptions o = parse_cli({"--can", "can0"});
   EXPECT_EQ(o.can_interfaces, (std::vector<std::string>{"can0"}));
-  EXPECT_EQ(o.node_id, 127);
-  EXPECT_EQ(o.log_level, LogLevel::Info);
+  EXPECT_FALSE(o.node_id);  // not given: the config file's or the default (127)
+  EXPECT_FALSE(o.log_level);
+  EXPECT_FALSE(o.config_file);
+  EXPECT_FALSE(o.mqtt_uri);
+  EXPECT_FALSE(o.demo);
   EXPECT_FALSE(o.help);
   EXPECT_FALSE(o.version);
 }
@@ -107,13 +110,37 @@ TEST(Cli, UnknownOptionIsRejectedAndNamed) {
   EXPECT_THAT(usage_error({"--can", "can0", "-x"}), HasSubstr("'-x'"));
 }
 
-TEST(Cli, ContractFlagsNotImplementedYetAreRefused) {
-  for (const char* flag : {"--config", "--mqtt", "--mqtt-format", "--http", "--gateway-id", "--demo"}) {
-    const std::string msg = usage_error({"--can", "can0", flag, "x"});
-    EXPECT_THAT(msg, HasSubstr(flag));
-    EXPECT_THAT(msg, HasSubstr("not supported"));
+TEST(Cli, ConfigOrDemoReplaceCan) {
+  EXPECT_EQ(parse_cli({"--config", "gw.yaml"}).config_file, "gw.yaml");
+  EXPECT_TRUE(parse_cli({"--demo"}).demo);
+  EXPECT_THAT(usage_error({"--demo=yes"}), HasSubstr("--demo takes no value"));
+  EXPECT_THAT(usage_error({"--config"}), HasSubstr("--config: missing value"));
+}
+
+TEST(Cli, MqttFlags) {
+  const CliOptions o = parse_cli({"--demo", "--mqtt", "tcp://127.0.0.1:1883", "--mqtt-format=protobuf",
+                                  "--gateway-id", "plant-7"});
+  EXPECT_EQ(o.mqtt_uri, "tcp://127.0.0.1:1883");
+  EXPECT_EQ(o.mqtt_format, "protobuf");
+  EXPECT_EQ(o.gateway_id, "plant-7");
+  EXPECT_THAT(usage_error({"--demo", "--mqtt", "localhost:1883"}), HasSubstr("not a broker URI"));
+  EXPECT_THAT(usage_error({"--demo", "--mqtt-format", "xml"}), HasSubstr("not json or protobuf"));
+  for (const char* bad : {"a/b", "a+", "#", "with space", ""}) {
+    EXPECT_THAT(usage_error({"--demo", "--gateway-id", bad}), HasSubstr("--gateway-id")) << bad;
   }
-  EXPECT_THAT(usage_error({"--can", "can0", "--http=127.0.0.1:8080"}), HasSubstr("--http"));
+}
+
+TEST(Cli, HttpIsAddrPort) {
+  EXPECT_EQ(parse_cli({"--demo", "--http", "0.0.0.0:8443"}).http, "0.0.0.0:8443");
+  EXPECT_EQ(parse_cli({"--demo", "--http=[::1]:80"}).http, "[::1]:80");
+  for (const char* bad : {"8080", "host:", ":80", "h:99999", "h:x", "::1:80"}) {
+    EXPECT_THAT(usage_error({"--demo", "--http", bad}), HasSubstr("is not ADDR:PORT")) << bad;
+  }
+  std::string host;
+  unsigned short port = 0;
+  ASSERT_TRUE(split_host_port("[::1]:8080", host, port));
+  EXPECT_EQ(host, "::1");
+  EXPECT_EQ(port, 8080);
 }
 
 TEST(Cli, EdsRepeatsAsNodeEqualsFile) {

@@ -1,0 +1,464 @@
+#include "config.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+namespace gateway {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A YAML node with the key path that led to it, so every error can say
+// where it is. Unknown keys are errors: a typo must not be a silent default.
+class At {
+ public:
+  At(const YAML::Node& n, std::string path, const std::string& file) : n_(n), path_(std::move(path)), file_(file) {}
+
+  [[noreturn]] void fail(const std::string& reason) const {
+    std::string where = file_.empty() ? std::string("<config>") : file_;
+    const auto mark = n_.Mark();
+    if (!n_.IsNull() || mark.line >= 0) {
+      if (mark.line >= 0) where += ":" + std::to_string(mark.line + 1);
+    }
+    throw ConfigError(where + ": " + (path_.empty() ? std::string("(top level)") : path_) + ": " + reason);
+  }
+
+  bool is_map() const { return n_.IsMap(); }
+  bool is_seq() const { return n_.IsSequence(); }
+  bool is_null() const { return !n_ || n_.IsNull(); }
+  const YAML::Node& node() const { return n_; }
+  const std::string& path() const { return path_; }
+
+  void expect_map(std::initializer_list<const char*> allowed) const {
+    if (is_null()) return;
+    if (!n_.IsMap()) fail("expected a mapping of keys");
+    for (const auto& kv : n_) {
+      const auto key = kv.first.as<std::string>();
+      if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
+        std::string list;
+        for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
+        At(kv.first, join(key), file_).fail("unknown key (known here: " + list + ")");
+      }
+    }
+  }
+
+  std::optional<At> get(const char* key) const {
+    if (is_null() || !n_.IsMap()) return std::nullopt;
+    auto child = n_[key];
+    if (!child) return std::nullopt;
+    return At(child, join(key), file_);
+  }
+
+  std::vector<At> items() const {
+    std::vector<At> out;
+    if (is_null()) return out;
+    if (!n_.IsSequence()) fail("expected a list");
+    std::size_t i = 0;
+    for (const auto& item : n_) out.emplace_back(item, path_ + "[" + std::to_string(i++) + "]", file_);
+    return out;
+  }
+
+  std::string str() const {
+    if (!n_.IsScalar()) fail("expected a single value");
+    return n_.Scalar();
+  }
+
+  bool boolean() const {
+    const auto s = str();
+    if (s == "true" || s == "yes" || s == "on") return true;
+    if (s == "false" || s == "no" || s == "off") return false;
+    fail("'" + s + "' is not true or false");
+  }
+
+  // Decimal or 0x hex integer within [lo, hi].
+  std::uint64_t integer(std::uint64_t lo, std::uint64_t hi) const {
+    const auto s = str();
+    std::uint64_t v = 0;
+    const char* b = s.data();
+    const char* e = s.data() + s.size();
+    int base = 10;
+    if (s.size() > 2 && s[0] == '0' && (s[1] == 'x' || s[1] == 'X')) {
+      b += 2;
+      base = 16;
+    }
+    auto [p, ec] = std::from_chars(b, e, v, base);
+    if (ec != std::errc() || p != e || b == e) fail("'" + s + "' is not a whole number");
+    if (v < lo || v > hi) fail(s + " is out of range " + std::to_string(lo) + ".." + std::to_string(hi));
+    return v;
+  }
+
+ private:
+  std::string join(const std::string& key) const { return path_.empty() ? key : path_ + "." + key; }
+
+  YAML::Node n_;
+  std::string path_;
+  const std::string& file_;
+};
+
+std::string resolve(const std::string& base_dir, const std::string& name) {
+  if (name.empty() || base_dir.empty() || fs::path(name).is_absolute()) return name;
+  return (fs::path(base_dir) / name).lexically_normal().string();
+}
+
+bool valid_topic_level(const std::string& s) {
+  if (s.empty() || s.size() > 64) return false;
+  return std::none_of(s.begin(), s.end(), [](char ch) {
+    const auto c = static_cast<unsigned char>(ch);
+    return c <= 0x20 || c == 0x7F || c == '/' || c == '+' || c == '#';
+  });
+}
+
+std::chrono::milliseconds ms(const At& a, std::uint64_t max = 65535) {
+  return std::chrono::milliseconds(a.integer(0, max));
+}
+
+void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
+  a.expect_map({"id", "name", "eds", "dcf", "heartbeat-consumer-ms", "guarding", "boot"});
+  auto id = a.get("id");
+  if (!id) a.fail("missing key 'id' (the node-ID, 1..127)");
+  n.id = static_cast<std::uint8_t>(id->integer(1, 127));
+  if (auto v = a.get("name")) n.name = v->str();
+  auto eds = a.get("eds");
+  auto dcf = a.get("dcf");
+  if (eds && dcf) dcf->fail("give either eds or dcf, not both");
+  if (eds || dcf) {
+    const At& f = eds ? *eds : *dcf;
+    n.eds = resolve(dir, f.str());
+    std::error_code ec;
+    if (!fs::is_regular_file(n.eds, ec)) f.fail("file '" + n.eds + "' not found");
+  }
+  if (auto v = a.get("heartbeat-consumer-ms")) n.heartbeat_consumer = ms(*v);
+  if (auto g = a.get("guarding")) {
+    g->expect_map({"guard-time-ms", "life-time-factor"});
+    if (auto v = g->get("guard-time-ms")) n.guarding.guard_time = ms(*v);
+    if (auto v = g->get("life-time-factor")) n.guarding.life_time_factor = static_cast<std::uint8_t>(v->integer(0, 255));
+    if ((n.guarding.guard_time.count() == 0) != (n.guarding.life_time_factor == 0))
+      g->fail("guard-time-ms and life-time-factor must both be set (or both 0)");
+  }
+  if (auto b = a.get("boot")) {
+    b->expect_map({"check-identity", "configure", "start"});
+    BootConfig bc;
+    if (auto v = b->get("check-identity")) bc.check_identity = v->boolean();
+    if (auto v = b->get("configure")) bc.configure = v->boolean();
+    if (auto v = b->get("start")) bc.start = v->boolean();
+    if (bc.configure && n.eds.empty()) b->fail("configure: true needs an eds or dcf file for the node");
+    n.boot = bc;
+  }
+}
+
+void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id, const std::string& dir) {
+  a.expect_map({"interface", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "nodes"});
+  auto iface = a.get("interface");
+  if (!iface) a.fail("missing key 'interface' (a SocketCAN interface such as can0)");
+  net.interface = iface->str();
+  if (net.interface.empty() || net.interface.size() > 15 || net.interface.find_first_of("/: \t") != std::string::npos)
+    iface->fail("'" + net.interface + "' is not an interface name");
+  if (auto v = a.get("bitrate")) net.bitrate = static_cast<std::uint32_t>(v->integer(1000, 8'000'000));
+  net.node_id = default_node_id;
+  if (auto v = a.get("node-id")) net.node_id = static_cast<std::uint8_t>(v->integer(1, 127));
+  if (auto v = a.get("heartbeat-ms")) net.heartbeat_producer = ms(*v);
+  if (auto s = a.get("sync")) {
+    s->expect_map({"period-us", "counter-overflow", "window-us"});
+    if (auto v = s->get("period-us")) net.sync.period = std::chrono::microseconds(v->integer(0, 0xFFFFFFFF));
+    if (auto v = s->get("counter-overflow")) {
+      net.sync.counter_overflow = static_cast<std::uint8_t>(v->integer(0, 240));
+      if (net.sync.counter_overflow == 1) v->fail("1 is reserved (CiA 301 7.5.2.22: 0 or 2..240)");
+    }
+    if (auto v = s->get("window-us")) net.sync.window = std::chrono::microseconds(v->integer(0, 0xFFFFFFFF));
+  }
+  if (auto t = a.get("time")) {
+    t->expect_map({"produce", "period-ms"});
+    if (auto v = t->get("produce")) net.time.produce = v->boolean();
+    if (auto v = t->get("period-ms")) net.time.period = std::chrono::milliseconds(v->integer(10, 86'400'000));
+  }
+  std::set<int> seen;
+  for (const auto& item : a.get("nodes") ? a.get("nodes")->items() : std::vector<At>{}) {
+    NodeConfig n;
+    parse_node(item, n, dir);
+    if (!seen.insert(n.id).second) item.fail("node " + std::to_string(n.id) + " is listed twice");
+    if (n.id == net.node_id) item.fail("node " + std::to_string(n.id) + " is the gateway's own node-ID");
+    net.nodes.push_back(std::move(n));
+  }
+}
+
+void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
+  a.expect_map({"uri", "client-id", "username", "password", "password-file", "tls", "format", "qos", "heartbeat",
+                "heartbeat-min-interval-ms", "queue"});
+  auto uri = a.get("uri");
+  if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
+  m.uri = uri->str();
+  m.enabled = true;
+  if (auto v = a.get("client-id")) m.client_id = v->str();
+  if (auto v = a.get("username")) m.username = v->str();
+  if (auto v = a.get("password")) m.password = v->str();
+  if (auto v = a.get("password-file")) {
+    std::ifstream in(resolve(dir, v->str()));
+    if (!in) v->fail("cannot read '" + resolve(dir, v->str()) + "'");
+    std::getline(in, m.password);
+  }
+  if (auto t = a.get("tls")) {
+    t->expect_map({"ca", "cert", "key"});
+    auto file = [&](const char* key, std::string& out) {
+      if (auto v = t->get(key)) {
+        out = resolve(dir, v->str());
+        std::error_code ec;
+        if (!fs::is_regular_file(out, ec)) v->fail("file '" + out + "' not found");
+      }
+    };
+    file("ca", m.ca_file);
+    file("cert", m.cert_file);
+    file("key", m.key_file);
+    if (m.cert_file.empty() != m.key_file.empty()) t->fail("cert and key go together");
+  }
+  if (auto v = a.get("format")) {
+    const auto f = v->str();
+    if (f == "json") m.format = PayloadFormat::Json;
+    else if (f == "protobuf") m.format = PayloadFormat::Protobuf;
+    else v->fail("'" + f + "' is not json or protobuf");
+  }
+  if (auto q = a.get("qos")) {
+    if (!q->is_map()) q->fail("expected kind: level pairs, e.g. tpdo: 0");  // read in parse_config
+  }
+  if (auto v = a.get("heartbeat")) m.heartbeat = v->boolean();
+  if (auto v = a.get("heartbeat-min-interval-ms")) m.heartbeat_min_interval = ms(*v, 3'600'000);
+  if (auto q = a.get("queue")) {
+    q->expect_map({"dir", "max-bytes", "max-messages"});
+    if (auto v = q->get("dir")) m.queue_dir = resolve(dir, v->str());
+    if (auto v = q->get("max-bytes")) m.queue_max_bytes = v->integer(1 << 16, 1ULL << 40);
+    if (auto v = q->get("max-messages")) m.queue_max_messages = v->integer(16, 1ULL << 32);
+  }
+}
+
+Role parse_role(const At& a) {
+  const auto s = a.str();
+  if (s == "viewer") return Role::Viewer;
+  if (s == "operator") return Role::Operator;
+  if (s == "admin") return Role::Admin;
+  a.fail("'" + s + "' is not viewer, operator or admin");
+}
+
+void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
+  a.expect_map({"listen", "tls", "allowed-origins", "tokens", "auth", "web-root"});
+  if (auto v = a.get("listen")) {
+    if (!split_host_port(v->str(), h.address, h.port)) v->fail("'" + v->str() + "' is not ADDR:PORT");
+  }
+  if (auto t = a.get("tls")) {
+    t->expect_map({"cert", "key"});
+    auto cert = t->get("cert");
+    auto key = t->get("key");
+    if (!cert || !key) t->fail("needs both cert and key");
+    h.cert_file = resolve(dir, cert->str());
+    h.key_file = resolve(dir, key->str());
+    std::error_code ec;
+    if (!fs::is_regular_file(h.cert_file, ec)) cert->fail("file '" + h.cert_file + "' not found");
+    if (!fs::is_regular_file(h.key_file, ec)) key->fail("file '" + h.key_file + "' not found");
+  }
+  if (auto o = a.get("allowed-origins")) {
+    for (const auto& item : o->items()) h.allowed_origins.push_back(item.str());
+  }
+  if (auto v = a.get("auth")) h.auth = v->boolean();
+  if (auto v = a.get("web-root")) h.web_root = resolve(dir, v->str());
+  if (auto t = a.get("tokens")) {
+    std::set<std::string> names;
+    for (const auto& item : t->items()) {
+      item.expect_map({"name", "role", "sha256"});
+      TokenConfig tc;
+      auto name = item.get("name");
+      auto role = item.get("role");
+      auto hash = item.get("sha256");
+      if (!name || !role || !hash) item.fail("a token needs name, role and sha256");
+      tc.name = name->str();
+      if (!names.insert(tc.name).second) name->fail("token name '" + tc.name + "' is used twice");
+      tc.role = parse_role(*role);
+      tc.sha256 = hash->str();
+      std::transform(tc.sha256.begin(), tc.sha256.end(), tc.sha256.begin(),
+                     [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); });
+      if (tc.sha256.size() != 64 || tc.sha256.find_first_not_of("0123456789abcdef") != std::string::npos)
+        hash->fail("not a hex SHA-256 (64 hex digits; store the hash, never the token)");
+      h.tokens.push_back(std::move(tc));
+    }
+  }
+}
+
+}  // namespace
+
+int MqttConfig::qos_for(EventKind k) const {
+  if (auto it = qos.find(k); it != qos.end()) return it->second;
+  switch (k) {
+    case EventKind::Tpdo:
+    case EventKind::UnclaimedPdo:
+    case EventKind::Heartbeat:
+    case EventKind::Sync:
+    case EventKind::Time:
+      return 0;
+    default:
+      return 1;
+  }
+}
+
+std::string default_gateway_id() {
+  char host[256] = {};
+  std::string id;
+  if (::gethostname(host, sizeof host - 1) == 0) id = host;
+  for (auto& c : id) {
+    const auto u = static_cast<unsigned char>(c);
+    if (u <= 0x20 || u == 0x7F || c == '/' || c == '+' || c == '#') c = '_';
+  }
+  return id.empty() ? std::string("gateway") : id;
+}
+
+Config parse_config(const std::string& yaml_text, const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError((file.empty() ? std::string("<config>") : file) + ":" + std::to_string(e.mark.line + 1) +
+                      ": not valid YAML: " + e.msg);
+  }
+  Config c;
+  c.source = file;
+  const std::string dir = file.empty() ? std::string() : fs::path(file).parent_path().string();
+  At top(root, "", file);
+  if (top.is_null()) return c;
+  top.expect_map({"gateway", "networks", "mqtt", "http"});
+  std::uint8_t default_node_id = 127;
+  if (auto g = top.get("gateway")) {
+    g->expect_map({"id", "node-id", "log-level", "state-dir"});
+    if (auto v = g->get("id")) {
+      c.gateway_id = v->str();
+      if (!valid_topic_level(c.gateway_id)) v->fail("'" + c.gateway_id + "' cannot be an MQTT topic level");
+    }
+    if (auto v = g->get("node-id")) default_node_id = static_cast<std::uint8_t>(v->integer(1, 127));
+    if (auto v = g->get("log-level")) {
+      auto l = parse_log_level(v->str());
+      if (!l) v->fail("'" + v->str() + "' is not one of trace, debug, info, warn, error");
+      c.log_level = *l;
+    }
+    if (auto v = g->get("state-dir")) c.state_dir = resolve(dir, v->str());
+  }
+  if (auto n = top.get("networks")) {
+    std::set<std::string> ifaces;
+    for (const auto& item : n->items()) {
+      NetworkConfig net;
+      parse_network(item, net, default_node_id, dir);
+      if (!ifaces.insert(net.interface).second) item.fail("interface " + net.interface + " is configured twice");
+      c.networks.push_back(std::move(net));
+    }
+  }
+  if (auto m = top.get("mqtt")) {
+    parse_mqtt(*m, c.mqtt, dir);
+    // QoS per kind needs the file name for errors, so it is read here.
+    if (auto q = m->get("qos")) {
+      for (const auto& kv : q->node()) {
+        const auto key = kv.first.as<std::string>();
+        At value(kv.second, q->path() + "." + key, file);
+        EventKind kind{};
+        if (key == "default") {
+          const int level = static_cast<int>(value.integer(0, 2));
+          for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k) c.mqtt.qos[static_cast<EventKind>(k)] = level;
+          continue;
+        }
+        if (!event_kind_from_string(key, kind))
+          At(kv.first, q->path() + "." + key, file)
+              .fail("unknown event kind (status, bus, state, heartbeat, emcy, tpdo, pdo, sync, time, boot, default)");
+        c.mqtt.qos[kind] = static_cast<int>(value.integer(0, 2));
+      }
+    }
+  }
+  if (auto h = top.get("http")) parse_http(*h, c.http, dir);
+  return c;
+}
+
+Config load_config(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw ConfigError(file + ": cannot be read");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_config(text.str(), file);
+}
+
+Config merge(Config c, const CliOptions& cli) {
+  if (cli.log_level) c.log_level = *cli.log_level;
+  if (cli.gateway_id) c.gateway_id = *cli.gateway_id;
+  if (c.gateway_id.empty()) c.gateway_id = default_gateway_id();
+  if (cli.node_id) {
+    for (auto& n : c.networks) n.node_id = static_cast<std::uint8_t>(*cli.node_id);
+  }
+  const std::uint8_t own = cli.node_id ? static_cast<std::uint8_t>(*cli.node_id)
+                                       : (c.networks.empty() ? std::uint8_t{127} : c.networks.front().node_id);
+  // --can replaces the file's list of networks; settings of a file network
+  // with the same interface are kept.
+  if (!cli.can_interfaces.empty()) {
+    std::vector<NetworkConfig> nets;
+    for (const auto& iface : cli.can_interfaces) {
+      auto it = std::find_if(c.networks.begin(), c.networks.end(),
+                             [&](const NetworkConfig& n) { return n.interface == iface; });
+      NetworkConfig n = it != c.networks.end() ? *it : NetworkConfig{};
+      n.interface = iface;
+      if (it == c.networks.end()) n.node_id = own;
+      nets.push_back(std::move(n));
+    }
+    c.networks = std::move(nets);
+  }
+  if (cli.demo) {
+    c.demo = true;
+    NetworkConfig sim;
+    sim.simulated = true;
+    sim.interface = "";
+    sim.node_id = own;
+    c.networks.push_back(std::move(sim));
+    c.http.auth = false;  // the demo is for looking at, on loopback
+  }
+  // --eds NODE=FILE describes NODE on every network.
+  for (const auto& e : cli.eds) {
+    std::error_code ec;
+    if (!fs::is_regular_file(e.file, ec)) throw ConfigError("--eds " + std::to_string(e.node) + "=" + e.file + ": file not found");
+    for (auto& net : c.networks) {
+      if (net.simulated) continue;
+      auto it = std::find_if(net.nodes.begin(), net.nodes.end(), [&](const NodeConfig& n) { return n.id == e.node; });
+      if (it == net.nodes.end()) {
+        NodeConfig n;
+        n.id = static_cast<std::uint8_t>(e.node);
+        net.nodes.push_back(n);
+        it = net.nodes.end() - 1;
+      }
+      it->eds = e.file;
+    }
+  }
+  if (cli.mqtt_uri) {
+    c.mqtt.enabled = true;
+    c.mqtt.uri = *cli.mqtt_uri;
+  }
+  if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
+  if (c.mqtt.client_id.empty()) c.mqtt.client_id = "canopen-gateway-" + c.gateway_id;
+  if (cli.http) split_host_port(*cli.http, c.http.address, c.http.port);
+  if (c.state_dir.empty()) c.state_dir = "/var/lib/canopen-gateway";
+  if (c.mqtt.queue_dir.empty()) c.mqtt.queue_dir = (fs::path(c.state_dir) / "mqtt-queue").string();
+
+  const std::string where = c.source.empty() ? std::string("command line") : c.source;
+  if (c.networks.empty())
+    throw ConfigError(where + ": networks: no network configured (use --can IFACE, networks: in the file, or --demo)");
+  for (const auto& net : c.networks) {
+    for (const auto& n : net.nodes) {
+      if (n.id == net.node_id)
+        throw ConfigError(where + ": node " + std::to_string(n.id) + " is the gateway's own node-ID on " +
+                          (net.simulated ? std::string("the demo network") : net.interface));
+    }
+  }
+  if (c.http.auth && c.http.tokens.empty() && c.http.address != "127.0.0.1" && c.http.address != "::1" &&
+      c.http.address != "localhost")
+    throw ConfigError(where + ": http.tokens: listening on " + c.http.address +
+                      " needs at least one token (or http.auth: false, which is not advised)");
+  return c;
+}
+
+}  // namespace gateway

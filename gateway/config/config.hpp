@@ -1,0 +1,132 @@
+// The gateway's configuration: a YAML file (deploy/gateway.example.yaml
+// shows every key) merged with the command line of ../shared/api-contract.md,
+// flags winning. Loading is an edge of the process, so errors are
+// exceptions: ConfigError::what() is one line naming the file, the line, the
+// key and the reason ("gw.yaml:12: networks[0].nodes[1].eds: file not found").
+//
+// Pure data and functions; thread-safe.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "cli.hpp"
+#include "event_message.hpp"
+#include "log.hpp"
+
+namespace gateway {
+
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct GuardingConfig {
+  std::chrono::milliseconds guard_time{0};  // 100Ch of the node; 0 = no guarding
+  std::uint8_t life_time_factor = 0;        // 100Dh
+};
+
+// Boot-up handling of one node in the spirit of CiA 302 (nmt/boot.hpp).
+struct BootConfig {
+  bool check_identity = true;  // compare 1000h/1018h with the EDS/DCF
+  bool configure = false;      // write the DCF's PDO, heartbeat and ParameterValue entries
+  bool start = false;          // NMT start once configured
+};
+
+struct NodeConfig {
+  std::uint8_t id = 0;
+  std::string name;     // optional; shown in the API and dashboard
+  std::string eds;      // EDS or DCF file ("" = none: values arrive raw)
+  std::chrono::milliseconds heartbeat_consumer{0};  // 0 = not consumed
+  GuardingConfig guarding;
+  std::optional<BootConfig> boot;  // nullopt: only watch the node
+};
+
+struct SyncConfig {
+  std::chrono::microseconds period{0};  // 1006h; 0 = the gateway produces no SYNC
+  std::uint8_t counter_overflow = 0;    // 1019h; 0 = no counter
+  std::chrono::microseconds window{0};  // 1007h; 0 = no window
+};
+
+struct TimeConfig {
+  bool produce = false;  // 1012h bit 30
+  std::chrono::milliseconds period{1000};
+};
+
+struct NetworkConfig {
+  std::string interface;     // SocketCAN interface; "" for the simulated demo network
+  bool simulated = false;    // --demo: in-process bus with simulated devices
+  std::uint32_t bitrate = 0; // informative only (the interface is configured outside)
+  std::uint8_t node_id = 127;  // the gateway's own node-ID on this network
+  std::chrono::milliseconds heartbeat_producer{1000};  // the gateway's 1017h
+  SyncConfig sync;
+  TimeConfig time;
+  std::vector<NodeConfig> nodes;
+};
+
+enum class PayloadFormat : std::uint8_t { Json, Protobuf };
+
+struct MqttConfig {
+  bool enabled = false;
+  std::string uri;  // tcp://host:1883, ssl://host:8883, ...
+  std::string client_id;  // default "canopen-gateway-<gateway id>"
+  std::string username;
+  std::string password;
+  std::string ca_file, cert_file, key_file;  // TLS
+  PayloadFormat format = PayloadFormat::Json;
+  std::map<EventKind, int> qos;  // per kind; defaults: tpdo/heartbeat/sync/time 0, others 1
+  bool heartbeat = true;         // publish heartbeat events at all
+  std::chrono::milliseconds heartbeat_min_interval{0};  // per node; 0 = every heartbeat
+  std::string queue_dir;              // disk buffer ("" = <state dir>/mqtt-queue)
+  std::uint64_t queue_max_bytes = 256ULL << 20;
+  std::uint64_t queue_max_messages = 1'000'000;
+  int qos_for(EventKind k) const;
+};
+
+enum class Role : std::uint8_t { Viewer, Operator, Admin };
+
+struct TokenConfig {
+  std::string name;    // who, in the audit log
+  Role role = Role::Viewer;
+  std::string sha256;  // hex SHA-256 of the bearer token
+};
+
+struct HttpConfig {
+  std::string address = "127.0.0.1";
+  unsigned short port = 8080;
+  std::string cert_file, key_file;  // HTTPS/WSS when both are set
+  std::vector<std::string> allowed_origins;
+  std::vector<TokenConfig> tokens;
+  bool auth = true;  // off only in --demo or when explicitly disabled
+  std::string web_root;  // dashboard files ("" = the built-in default)
+};
+
+struct Config {
+  std::string source;      // the file it came from ("" = command line only)
+  std::string gateway_id;  // default: host name
+  LogLevel log_level = LogLevel::Info;
+  std::string state_dir;   // where the MQTT queue lives by default
+  bool demo = false;
+  std::vector<NetworkConfig> networks;  // numbered from 1 in this order
+  MqttConfig mqtt;
+  HttpConfig http;
+};
+
+// Parses YAML text; `file` is used in error messages only. Relative file
+// names inside (EDS, TLS) are resolved against the file's directory.
+Config parse_config(const std::string& yaml_text, const std::string& file);
+// Reads and parses a file. Throws ConfigError.
+Config load_config(const std::string& file);
+// Applies the command line on top (flags win) and checks the result as a
+// whole (at least one network, unique interfaces and node-IDs, EDS files
+// exist). Throws ConfigError (or UsageError for flag problems).
+Config merge(Config base, const CliOptions& cli);
+// The host name, sanitised into an MQTT topic level.
+std::string default_gateway_id();
+
+}  // namespace gateway

@@ -1,0 +1,278 @@
+// Configuration file + command line (gateway/config/config.cpp): every key
+// reaches its field, flags win, and every mistake is one line naming file,
+// line, key and reason while nothing else is assumed.
+#include "config.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace gateway {
+namespace {
+
+using ::testing::HasSubstr;
+using namespace std::chrono_literals;
+
+const std::string kEds = std::string(CANOPEN_SOURCE_DIR) + "/deploy/eds/cia402-drive.eds";
+const std::string kIo = std::string(CANOPEN_SOURCE_DIR) + "/deploy/eds/cia401-io-module.eds";
+
+std::string config_error(const std::string& yaml, const std::string& file = "gw.yaml") {
+  try {
+    parse_config(yaml, file);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected a ConfigError for:\n" << yaml;
+  return {};
+}
+
+std::string merge_error(const Config& c, const CliOptions& cli) {
+  try {
+    merge(c, cli);
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "expected a ConfigError";
+  return {};
+}
+
+TEST(Config, FullFileReachesEveryField) {
+  const std::string yaml = R"(
+gateway:
+  id: plant-7
+  node-id: 100
+  log-level: debug
+  state-dir: /tmp/gw-state
+networks:
+  - interface: can0
+    bitrate: 500000
+    heartbeat-ms: 500
+    sync: {period-us: 10000, counter-overflow: 16, window-us: 8000}
+    time: {produce: true, period-ms: 2000}
+    nodes:
+      - id: 5
+        name: drive
+        eds: )" + kEds + R"(
+        heartbeat-consumer-ms: 1500
+        boot: {configure: true, start: true}
+      - id: 0x0A
+        dcf: )" + kIo + R"(
+        guarding: {guard-time-ms: 100, life-time-factor: 3}
+  - interface: can1
+    node-id: 1
+mqtt:
+  uri: tcp://broker:1883
+  client-id: gw
+  username: u
+  password: p
+  format: protobuf
+  qos: {default: 1, tpdo: 0}
+  heartbeat: false
+  heartbeat-min-interval-ms: 5000
+  queue: {dir: q, max-bytes: 1048576, max-messages: 1000}
+http:
+  listen: 0.0.0.0:8443
+  allowed-origins: [https://scada.example]
+  tokens:
+    - {name: ops, role: operator, sha256: 9F86D081884C7D659A2FEAA0C55AD015A3BF4F1B2B0B822CD15D6C15B0F00A08}
+)";
+  const Config c = parse_config(yaml, "/etc/gw/gw.yaml");
+  EXPECT_EQ(c.gateway_id, "plant-7");
+  EXPECT_EQ(c.log_level, LogLevel::Debug);
+  EXPECT_EQ(c.state_dir, "/tmp/gw-state");
+  ASSERT_EQ(c.networks.size(), 2U);
+  const auto& n1 = c.networks[0];
+  EXPECT_EQ(n1.interface, "can0");
+  EXPECT_EQ(n1.bitrate, 500000U);
+  EXPECT_EQ(n1.node_id, 100);  // gateway.node-id is the default per network
+  EXPECT_EQ(n1.heartbeat_producer, 500ms);
+  EXPECT_EQ(n1.sync.period, 10000us);
+  EXPECT_EQ(n1.sync.counter_overflow, 16);
+  EXPECT_EQ(n1.sync.window, 8000us);
+  EXPECT_TRUE(n1.time.produce);
+  EXPECT_EQ(n1.time.period, 2000ms);
+  ASSERT_EQ(n1.nodes.size(), 2U);
+  EXPECT_EQ(n1.nodes[0].id, 5);
+  EXPECT_EQ(n1.nodes[0].name, "drive");
+  EXPECT_EQ(n1.nodes[0].eds, kEds);
+  EXPECT_EQ(n1.nodes[0].heartbeat_consumer, 1500ms);
+  ASSERT_TRUE(n1.nodes[0].boot);
+  EXPECT_TRUE(n1.nodes[0].boot->configure);
+  EXPECT_TRUE(n1.nodes[0].boot->start);
+  EXPECT_TRUE(n1.nodes[0].boot->check_identity);
+  EXPECT_EQ(n1.nodes[1].id, 10);
+  EXPECT_EQ(n1.nodes[1].guarding.guard_time, 100ms);
+  EXPECT_EQ(n1.nodes[1].guarding.life_time_factor, 3);
+  EXPECT_FALSE(n1.nodes[1].boot);
+  EXPECT_EQ(c.networks[1].node_id, 1);
+  EXPECT_TRUE(c.mqtt.enabled);
+  EXPECT_EQ(c.mqtt.uri, "tcp://broker:1883");
+  EXPECT_EQ(c.mqtt.client_id, "gw");
+  EXPECT_EQ(c.mqtt.format, PayloadFormat::Protobuf);
+  EXPECT_EQ(c.mqtt.qos_for(EventKind::Tpdo), 0);
+  EXPECT_EQ(c.mqtt.qos_for(EventKind::Heartbeat), 1);  // default: 1 applies to every kind not named
+  EXPECT_FALSE(c.mqtt.heartbeat);
+  EXPECT_EQ(c.mqtt.heartbeat_min_interval, 5000ms);
+  EXPECT_EQ(c.mqtt.queue_dir, "/etc/gw/q");  // relative to the file
+  EXPECT_EQ(c.mqtt.queue_max_bytes, 1048576U);
+  EXPECT_EQ(c.http.address, "0.0.0.0");
+  EXPECT_EQ(c.http.port, 8443);
+  ASSERT_EQ(c.http.tokens.size(), 1U);
+  EXPECT_EQ(c.http.tokens[0].role, Role::Operator);
+  EXPECT_EQ(c.http.tokens[0].sha256, "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08");
+}
+
+TEST(Config, EmptyFileGivesDefaults) {
+  const Config c = parse_config("", "gw.yaml");
+  EXPECT_TRUE(c.networks.empty());
+  EXPECT_FALSE(c.mqtt.enabled);
+  EXPECT_EQ(c.http.port, 8080);
+  EXPECT_EQ(c.http.address, "127.0.0.1");
+  EXPECT_TRUE(c.http.auth);
+  MqttConfig m;
+  EXPECT_EQ(m.qos_for(EventKind::Emcy), 1);   // nothing lost when the broker goes away
+  EXPECT_EQ(m.qos_for(EventKind::State), 1);
+  EXPECT_EQ(m.qos_for(EventKind::Tpdo), 0);   // high rate, the next value replaces it
+}
+
+TEST(Config, ErrorsNameFileLineKeyAndReason) {
+  EXPECT_EQ(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 200\n"),
+            "gw.yaml:4: networks[0].nodes[0].id: 200 is out of range 1..127");
+  EXPECT_EQ(config_error("networks:\n  - interface: can0\n    bitrat: 5\n"),
+            "gw.yaml:3: networks[0].bitrat: unknown key (known here: interface, bitrate, node-id, heartbeat-ms, "
+            "sync, time, nodes)");
+  EXPECT_THAT(config_error("networks:\n  - bitrate: 500000\n"), HasSubstr("networks[0]: missing key 'interface'"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        eds: /nope.eds\n"),
+              HasSubstr("gw.yaml:5: networks[0].nodes[0].eds: file '/nope.eds' not found"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://x\n  format: xml\n"), HasSubstr("gw.yaml:3: mqtt.format: 'xml' is not"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://x\n  qos: {tpdo: 3}\n"), HasSubstr("mqtt.qos.tpdo: 3 is out of range 0..2"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://x\n  qos: {pdos: 1}\n"), HasSubstr("mqtt.qos.pdos: unknown event kind"));
+  EXPECT_THAT(config_error("mqtt:\n  client-id: x\n"), HasSubstr("mqtt: missing key 'uri'"));
+  EXPECT_THAT(config_error("gateway:\n  id: a/b\n"), HasSubstr("gateway.id: 'a/b' cannot be an MQTT topic level"));
+  EXPECT_THAT(config_error("gateway:\n  log-level: loud\n"), HasSubstr("gateway.log-level: 'loud' is not one of"));
+  EXPECT_THAT(config_error("http:\n  listen: 8080\n"), HasSubstr("http.listen: '8080' is not ADDR:PORT"));
+  EXPECT_THAT(config_error("http:\n  tokens:\n    - {name: a, role: root, sha256: x}\n"),
+              HasSubstr("http.tokens[0].role: 'root' is not viewer, operator or admin"));
+  EXPECT_THAT(config_error("http:\n  tokens:\n    - {name: a, role: admin, sha256: secret}\n"),
+              HasSubstr("not a hex SHA-256"));
+  EXPECT_THAT(config_error("networks: [1, 2\n"), HasSubstr("gw.yaml:2: not valid YAML"));
+  EXPECT_THAT(config_error("networks: can0\n"), HasSubstr("networks: expected a list"));
+  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http)");
+  EXPECT_THAT(config_error("- a\n"), HasSubstr("(top level): expected a mapping of keys"));
+}
+
+TEST(Config, NodeRulesAreChecked) {
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - {id: 5}\n      - {id: 5}\n"),
+              HasSubstr("networks[0].nodes[1]: node 5 is listed twice"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - {id: 127}\n"),
+              HasSubstr("node 127 is the gateway's own node-ID"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - {id: 5, boot: {configure: true}}\n"),
+              HasSubstr("configure: true needs an eds or dcf file"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - {id: 5, guarding: {guard-time-ms: 100}}\n"),
+              HasSubstr("must both be set"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n  - interface: can0\n"),
+              HasSubstr("networks[1]: interface can0 is configured twice"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    sync: {counter-overflow: 1}\n"),
+              HasSubstr("1 is reserved"));
+}
+
+TEST(Config, FlagsWinOverTheFile) {
+  Config file = parse_config("gateway: {id: from-file, node-id: 100, log-level: warn}\n"
+                             "networks:\n  - interface: can0\n    heartbeat-ms: 250\n  - interface: can1\n"
+                             "mqtt: {uri: tcp://file:1883}\nhttp: {listen: 127.0.0.1:9000}\n",
+                             "gw.yaml");
+  CliOptions cli;
+  cli.gateway_id = "from-flag";
+  cli.node_id = 42;
+  cli.log_level = LogLevel::Trace;
+  cli.mqtt_uri = "tcp://flag:1883";
+  cli.mqtt_format = "protobuf";
+  cli.http = "127.0.0.1:9999";
+  cli.can_interfaces = {"can1", "vcan9"};
+  const Config c = merge(file, cli);
+  EXPECT_EQ(c.gateway_id, "from-flag");
+  EXPECT_EQ(c.log_level, LogLevel::Trace);
+  EXPECT_EQ(c.mqtt.uri, "tcp://flag:1883");
+  EXPECT_EQ(c.mqtt.format, PayloadFormat::Protobuf);
+  EXPECT_EQ(c.http.port, 9999);
+  ASSERT_EQ(c.networks.size(), 2U);  // --can replaces the file's list, in flag order
+  EXPECT_EQ(c.networks[0].interface, "can1");
+  EXPECT_EQ(c.networks[1].interface, "vcan9");
+  EXPECT_EQ(c.networks[0].node_id, 42);
+  EXPECT_EQ(c.networks[1].node_id, 42);
+
+  // Without flags, the file's values stay.
+  const Config d = merge(file, CliOptions{});
+  EXPECT_EQ(d.gateway_id, "from-file");
+  EXPECT_EQ(d.networks.size(), 2U);
+  EXPECT_EQ(d.networks[0].heartbeat_producer, 250ms);
+  EXPECT_EQ(d.mqtt.client_id, "canopen-gateway-from-file");
+}
+
+TEST(Config, EdsFlagDescribesTheNodeOnEveryNetwork) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0", "can1"};
+  cli.eds = {{5, kEds}};
+  const Config c = merge(Config{}, cli);
+  for (const auto& net : c.networks) {
+    ASSERT_EQ(net.nodes.size(), 1U);
+    EXPECT_EQ(net.nodes[0].id, 5);
+    EXPECT_EQ(net.nodes[0].eds, kEds);
+  }
+  cli.eds = {{5, "/missing.eds"}};
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--eds 5=/missing.eds: file not found"));
+}
+
+TEST(Config, DemoAddsASimulatedNetworkWithoutAuth) {
+  CliOptions cli;
+  cli.demo = true;
+  const Config c = merge(Config{}, cli);
+  ASSERT_EQ(c.networks.size(), 1U);
+  EXPECT_TRUE(c.networks[0].simulated);
+  EXPECT_TRUE(c.demo);
+  EXPECT_FALSE(c.http.auth);
+  EXPECT_FALSE(c.mqtt.enabled);  // MQTT only when asked for
+  EXPECT_FALSE(c.gateway_id.empty());
+}
+
+TEST(Config, NothingToRunIsAnError) {
+  EXPECT_THAT(merge_error(parse_config("mqtt: {uri: tcp://x:1}\n", "gw.yaml"), CliOptions{}),
+              HasSubstr("gw.yaml: networks: no network configured"));
+}
+
+TEST(Config, AnOpenListenerNeedsTokens) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.http = "0.0.0.0:8080";
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("http.tokens: listening on 0.0.0.0 needs at least one token"));
+  Config open = parse_config("http: {auth: false}\n", "gw.yaml");
+  EXPECT_NO_THROW(merge(open, cli));
+}
+
+TEST(Config, LoadConfigReadsTheFile) {
+  const auto path = std::filesystem::temp_directory_path() / "canopen-config-test.yaml";
+  {
+    std::ofstream out(path);
+    out << "networks:\n  - interface: vcan0\n";
+  }
+  const Config c = load_config(path.string());
+  ASSERT_EQ(c.networks.size(), 1U);
+  EXPECT_EQ(c.networks[0].interface, "vcan0");
+  std::filesystem::remove(path);
+  try {
+    load_config(path.string());
+    ADD_FAILURE() << "expected ConfigError";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("cannot be read"));
+  }
+}
+
+TEST(Config, ExampleFileInDeployIsValid) {
+  const Config c = load_config(std::string(CANOPEN_SOURCE_DIR) + "/deploy/gateway.example.yaml");
+  EXPECT_FALSE(c.networks.empty());
+}
+
+}  // namespace
+}  // namespace gateway
