@@ -1,0 +1,12 @@
+# Stack events -> MQTT/WebSocket messages, and request/reply bodies
+# (proto/canopen_gateway.proto). Links the generated code as a separate
+# library so its headers are SYSTEM and not held to our warnings.
+if(TARGET canopen_proto)
+  add_library(gateway_messages STATIC
+    ${CMAKE_CURRENT_LIST_DIR}/event_encoder.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/request_codec.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/json_text.cpp
+    ${CMAKE_CURRENT_LIST_DIR}/proto_value.cpp)
+  target_include_directories(gateway_messages PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+  target_link_libraries(gateway_messages PUBLIC canopen_proto canopen_json gateway_lib PRIVATE canopen_options)
+endif()
