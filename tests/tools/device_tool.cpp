@@ -4,47 +4,36 @@
 //
 //   device_tool IFACE NODE EDSFILE [--heartbeat MS] [--emcy-after MS CODE] [--tpdo-period MS]
 //
-// The object dictionary comes from EDSFILE (with $NODEID = NODE). It sends
+// A canopen::Device on the dictionary of EDSFILE (with $NODEID = NODE). It sends
 // its boot-up message, heartbeats every MS (1017h), serves SDO, raises EMCY
 // CODE once MS after start, and every --tpdo-period increments the first
-// integer mapped into TPDO 1 so the event-driven TPDO goes out, but only
-// while operational (CiA 301 7.3.2.2.5: PDOs only in that state).
+// integer mapped into TPDO 1 (an object write: the TPDOs mapping it are
+// events), but only while operational (CiA 301 7.3.2.2.5: PDOs only in that
+// state).
 // Prints "ready", NMT state changes, "emcy CODE" and "tpdo VALUE" on stdout.
 // SIGINT/SIGTERM: exit 0.
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 #include <boost/asio/steady_timer.hpp>
 
-#include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "canopen/device.hpp"
 #include "canopen/eds/eds.hpp"
-#include "canopen/emcy/emcy.hpp"
-#include "canopen/nmt/slave.hpp"
-#include "canopen/pdo/transmitter.hpp"
-#include "canopen/sdo/server.hpp"
 #include "canopen/socketcan/channel.hpp"
+#include "canopen/socketcan/link_monitor.hpp"
 #include "canopen/socketcan/service_driver.hpp"
 #include "tool_support.hpp"
 
 namespace {
 
-using namespace std::chrono_literals;
-
 using canopen::tools::parse_number;
-
-// EmcyProducer has no receive side; ServiceDriver wants the full shape.
-struct EmcyService {
-  canopen::emcy::EmcyProducer& producer;
-  void on_frame(const canopen::can::Frame&, canopen::TimePoint) {}
-  void on_time(canopen::TimePoint now) { producer.on_time(now); }
-  canopen::TimePoint next_deadline() const { return producer.next_deadline(); }
-};
 
 // The first integer object mapped into TPDO 1 (1A00h), if any.
 std::optional<std::pair<std::uint16_t, std::uint8_t>> first_mapped_integer(const canopen::od::ObjectDictionary& od) {
@@ -104,7 +93,7 @@ int run(const std::vector<std::string>& a) {
   auto desc = canopen::eds::load_device_description(a[2], node);
   auto& od = desc.od;
   if (heartbeat_ms) {
-    // Set before start(): the slave reads 1017h during its initialisation.
+    // Set before start(): the NMT slave reads 1017h during its initialisation.
     if (auto ec = od.set(0x1017, 0, canopen::Value::of_unsigned(canopen::DataType::Unsigned16, *heartbeat_ms)))
       throw std::runtime_error("cannot set 1017h: " + ec.message());
   }
@@ -112,32 +101,20 @@ int run(const std::vector<std::string>& a) {
   boost::asio::io_context io;
   auto monitor = canopen::socketcan::LinkMonitor::create(io);
   auto channel = canopen::socketcan::SocketCanChannel::open(io, iface, monitor);
-  auto sink = [&channel](const canopen::can::Frame& f) { channel->send(f); };
 
-  canopen::sdo::ServerConfig sdo_cfg;
-  sdo_cfg.node_id = node;
-  canopen::sdo::SdoServer server(od, sdo_cfg, sink);
-  canopen::nmt::NmtSlave slave(
-      od, node, sink,
-      canopen::nmt::SlaveCallbacks{{}, {},
-                                   [](canopen::NmtState now, canopen::NmtState) {
-                                     say("state " + std::string(canopen::to_string(now)));
-                                   },
-                                   {}});
-  canopen::emcy::EmcyProducer emcy(od, sink);
-  EmcyService emcy_service{emcy};
-  canopen::pdo::PdoTransmitter tpdos(sink);
-  const auto start = canopen::SteadyClock::now();
-  if (auto r = tpdos.add_from(node, canopen::pdo::Direction::Transmit, 1, od, start); !r)
-    throw std::runtime_error("TPDO 1: " + r.error().code.message() + " " + r.error().detail);
+  canopen::DeviceConfig cfg;
+  cfg.node_id = node;
+  canopen::DeviceCallbacks callbacks;
+  callbacks.on_state_change = [](canopen::NmtState now, canopen::NmtState) {
+    say("state " + std::string(canopen::to_string(now)));
+  };
+  canopen::Device device(od, cfg, [&channel](const canopen::can::Frame& f) { channel->send(f); }, callbacks);
+  if (!device.pdo_errors().empty()) throw std::runtime_error(device.pdo_errors().front());
   const auto counter = first_mapped_integer(od);
 
   canopen::socketcan::ServiceDriver driver(io, *channel);
-  driver.add(server);
-  driver.add(slave);
-  driver.add(emcy_service);
-  driver.add(tpdos);
-  slave.start(start);  // boot-up (7.2.8.3.3), then heartbeats
+  driver.add(device);
+  device.start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
   driver.poke();
 
   boost::asio::steady_timer emcy_timer(io);
@@ -147,7 +124,7 @@ int run(const std::vector<std::string>& a) {
       if (ec) return;
       char code[8];
       std::snprintf(code, sizeof code, "%04X", emcy_code);
-      if (emcy.raise(emcy_code, 0, canopen::SteadyClock::now())) say(std::string("emcy ") + code);
+      if (device.raise_emcy(emcy_code, 0, canopen::SteadyClock::now())) say(std::string("emcy ") + code);
       driver.poke();
     });
   }
@@ -157,13 +134,11 @@ int run(const std::vector<std::string>& a) {
     tpdo_timer.expires_after(std::chrono::milliseconds(*tpdo_period_ms));
     tpdo_timer.async_wait([&](const boost::system::error_code& ec) {
       if (ec) return;
-      if (counter && slave.service_active(canopen::nmt::Service::Pdo)) {
-        const auto now = canopen::SteadyClock::now();
+      if (counter && device.state() == canopen::NmtState::Operational) {
         const auto [index, sub] = *counter;
         if (auto v = od.get(index, sub)) {
           const auto next = incremented(*v);
-          od.set(index, sub, next);
-          if (!tpdos.set_value(node, 1, index, sub, next, now)) say("tpdo " + canopen::format_value(next));
+          if (!device.set(index, sub, next, canopen::SteadyClock::now())) say("tpdo " + canopen::format_value(next));
           driver.poke();
         }
       }
@@ -176,10 +151,7 @@ int run(const std::vector<std::string>& a) {
   signals.async_wait([&](const boost::system::error_code&, int) {
     emcy_timer.cancel();
     tpdo_timer.cancel();
-    driver.remove(&server);
-    driver.remove(&slave);
-    driver.remove(&emcy_service);
-    driver.remove(&tpdos);
+    driver.remove(&device);
     channel->close();
     monitor->stop();
   });

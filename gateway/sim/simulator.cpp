@@ -1,0 +1,342 @@
+#include "sim/simulator.hpp"
+
+#include <boost/asio/post.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <utility>
+#include <vector>
+
+#include "canopen/pdo/mapping.hpp"
+
+namespace canopen::sim {
+
+namespace {
+
+constexpr std::uint16_t kProfileIo = 401;     // CiA 401 generic I/O module
+constexpr std::uint16_t kProfileDrive = 402;  // CiA 402 drive
+
+struct EmcyPlan {
+  std::uint16_t code;
+  std::uint8_t bits;
+};
+// What the periodic EMCY cycles through: plausible device errors.
+constexpr std::array<EmcyPlan, 3> kPeriodicEmcy{{{0x3210, emcy::error_register::kVoltage},      // DC link over-voltage
+                                                 {0x4210, emcy::error_register::kTemperature},  // excess temperature device
+                                                 {0x2310, emcy::error_register::kCurrent}}};    // continuous over current
+
+std::uint8_t register_bits_for(std::uint16_t code) {
+  switch (code >> 12) {
+    case 0x2: return emcy::error_register::kCurrent;
+    case 0x3: return emcy::error_register::kVoltage;
+    case 0x4: return emcy::error_register::kTemperature;
+    case 0x8: return emcy::error_register::kCommunication;
+    case 0xF: return emcy::error_register::kDeviceProfile;
+    default: return 0;
+  }
+}
+
+std::string hex4(std::uint16_t v) {
+  static constexpr char kDigits[] = "0123456789ABCDEF";
+  std::string s(4, '0');
+  for (int i = 3; i >= 0; --i, v = static_cast<std::uint16_t>(v >> 4)) s[static_cast<std::size_t>(i)] = kDigits[v & 0xF];
+  return s;
+}
+
+std::optional<double> as_double(const std::optional<Value>& v) {
+  if (!v) return std::nullopt;
+  if (const auto* u = std::get_if<std::uint64_t>(&v->data)) return static_cast<double>(*u);
+  if (const auto* s = std::get_if<std::int64_t>(&v->data)) return static_cast<double>(*s);
+  if (const auto* f = std::get_if<float>(&v->data)) return static_cast<double>(*f);
+  if (const auto* d = std::get_if<double>(&v->data)) return *d;
+  return std::nullopt;
+}
+
+// x as a value of the entry's numeric type, inside its limits and its type's range.
+std::optional<Value> numeric(const od::SubEntry& e, double x) {
+  if (auto lo = as_double(e.low)) x = std::max(x, *lo);
+  if (auto hi = as_double(e.high)) x = std::min(x, *hi);
+  const DataType t = e.type;
+  if (is_unsigned_integer(t)) {
+    x = std::clamp(std::round(x), 0.0, static_cast<double>(unsigned_max(t)));
+    return Value::of_unsigned(t, static_cast<std::uint64_t>(x));
+  }
+  if (is_signed_integer(t)) {
+    x = std::clamp(std::round(x), static_cast<double>(signed_min(t)), static_cast<double>(signed_max(t)));
+    return Value::of_signed(t, static_cast<std::int64_t>(x));
+  }
+  if (t == DataType::Real32) return Value::of_real32(static_cast<float>(x));
+  if (t == DataType::Real64) return Value::of_real64(x);
+  if (t == DataType::Boolean) return Value::of_bool(x >= 0.5);
+  return std::nullopt;
+}
+
+// The next plausible value of a TPDO-mapped object at `t` seconds after
+// power-on; nullopt leaves the object alone.
+std::optional<Value> generate(const od::ObjectDictionary& od, std::uint16_t profile, std::uint16_t index,
+                              std::uint8_t sub, double t, std::uint64_t tick) {
+  const od::SubEntry* e = od.find(index, sub);
+  if (e == nullptr) return std::nullopt;
+  const double w = 2.0 * std::numbers::pi;
+  if (profile == kProfileDrive) {
+    switch (index) {
+      case 0x6041:  // Statusword: operation enabled, "target reached" toggling
+        return numeric(*e, (tick / 20) % 2 == 0 ? 0x0637 : 0x0237);
+      case 0x6064:  // Position actual value: integral of the velocity below
+        return numeric(*e, 2000.0 * 10.0 / w * (1.0 - std::cos(w * t / 10.0)));
+      case 0x606C:  // Velocity actual value: a 10 s speed cycle
+        return numeric(*e, 2000.0 * std::sin(w * t / 10.0));
+      case 0x6077:  // Torque actual value
+        return numeric(*e, 300.0 * std::sin(w * t / 3.0));
+      case 0x6061:  // Modes of operation display mirrors 6060h
+        if (auto m = od.get(0x6060, 0); m && m->type == e->type) return *m;
+        return std::nullopt;
+      default: break;
+    }
+  }
+  if (profile == kProfileIo) {
+    if (index >= 0x6000 && index <= 0x6003)  // digital inputs: a walking bit per group
+      return numeric(*e, static_cast<double>(1U << ((tick / 5 + sub) % 8)));
+    if (index == 0x6401 || index == 0x6402)  // analog inputs: slow sine per channel
+      return numeric(*e, 10000.0 * std::sin(w * t / 20.0 + sub));
+  }
+  if (e->type == DataType::Boolean) return Value::of_bool((tick / 10) % 2 == 1);
+  if (is_unsigned_integer(e->type)) {
+    const double lo = as_double(e->low).value_or(0.0);
+    const double hi = std::min(as_double(e->high).value_or(65535.0), static_cast<double>(unsigned_max(e->type)));
+    const double span = std::max(hi - lo + 1.0, 1.0);
+    return numeric(*e, lo + std::fmod(static_cast<double>(tick), span));
+  }
+  if (is_signed_integer(e->type) || is_real(e->type)) return numeric(*e, 1000.0 * std::sin(w * t / 5.0 + sub));
+  return std::nullopt;
+}
+
+void ensure_u32(od::ObjectDictionary& od, std::uint16_t index, const char* name, std::uint32_t value) {
+  if (od.find(index, 0) == nullptr)
+    od.insert(od::make_var(index, name, DataType::Unsigned32, od::Access::ReadWrite,
+                           Value::of_unsigned(DataType::Unsigned32, value)));
+}
+
+}  // namespace
+
+struct Simulator::Node {
+  std::uint8_t id = 0;
+  std::uint16_t profile = 0;     // 1000h bits 0-15
+  od::ObjectDictionary initial;  // the EDS values, restored by resets
+  od::ObjectDictionary od;
+  std::unique_ptr<Device> device;
+  bool sync_producer = false;
+  std::uint16_t emcy_active = 0;
+  std::size_t emcy_next = 0;
+};
+
+Simulator::Simulator(boost::asio::io_context& io, can::Channel& channel, SimulatorOptions options,
+                     LineHandler on_line)
+    : io_(io),
+      channel_(channel),
+      opt_(options),
+      on_line_(std::move(on_line)),
+      driver_(io, channel),
+      value_timer_(io),
+      emcy_timer_(io) {}
+
+Simulator::~Simulator() { stop(); }
+
+void Simulator::say(const std::string& line) {
+  if (on_line_) on_line_(line);
+}
+
+void Simulator::add_node(std::uint8_t node, const std::filesystem::path& eds) {
+  if (node < 1 || node > 127) throw std::invalid_argument("node-ID must be 1..127");
+  add_node(node, eds::load_device_description(eds, node));
+}
+
+void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) {
+  if (node < 1 || node > 127) throw std::invalid_argument("node-ID must be 1..127");
+  if (nodes_.contains(node)) throw std::invalid_argument("node " + std::to_string(node) + " given twice");
+  auto n = std::make_unique<Node>();
+  Node* np = n.get();
+  n->id = node;
+  n->od = std::move(description.od);
+  n->profile = static_cast<std::uint16_t>(n->od.get_unsigned(0x1000, 0).value_or(0) & 0xFFFF);
+  // Objects the simulation writes must exist before the Device observes the dictionary.
+  if (n->od.find(0x1017, 0) == nullptr)
+    n->od.insert(od::make_var(0x1017, "Producer heartbeat time", DataType::Unsigned16, od::Access::ReadWrite,
+                              Value::of_unsigned(DataType::Unsigned16, 0)));
+  n->sync_producer = opt_.sync_period.count() > 0 && nodes_.empty();
+  if (n->sync_producer) {
+    ensure_u32(n->od, 0x1005, "COB-ID SYNC message", 0x80);
+    ensure_u32(n->od, 0x1006, "Communication cycle period", 0);
+  }
+  n->initial = n->od;
+
+  DeviceConfig cfg;
+  cfg.node_id = node;
+  DeviceCallbacks cb;
+  cb.on_state_change = [this, np](NmtState now, NmtState before) {
+    if (before == NmtState::Initialising) {
+      say("node " + std::to_string(np->id) + " boot-up");
+      if (opt_.auto_start) {
+        // Not from inside the Device's callback: after it returns.
+        boost::asio::post(io_, [this, np, alive = std::weak_ptr<bool>(alive_)] {
+          if (alive.expired() || !running_) return;
+          np->device->command(NmtCommand::Start, SteadyClock::now());
+          driver_.poke();
+        });
+      }
+    }
+    say("node " + std::to_string(np->id) + " state " + std::string(to_string(now)));
+  };
+  cb.on_reset_application = [this, np] { restore(*np, 0x2000, 0xFFFF); };
+  cb.on_reset_communication = [this, np] {
+    restore(*np, 0x1000, 0x1FFF);
+    (void)np->od.set(0x1017, 0,
+                     Value::of_unsigned(DataType::Unsigned16,
+                                        static_cast<std::uint64_t>(std::min<std::int64_t>(opt_.heartbeat.count(), 65535))));
+    if (np->sync_producer) {
+      const auto us = static_cast<std::uint64_t>(
+          std::chrono::duration_cast<std::chrono::microseconds>(opt_.sync_period).count());
+      (void)np->od.set(0x1006, 0, Value::of_unsigned(DataType::Unsigned32, us));
+      const auto cob = np->od.get_unsigned(0x1005, 0).value_or(0x80);
+      (void)np->od.set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, cob | emcy::kCobIdBit30));
+    }
+    np->emcy_active = 0;
+  };
+  cb.on_rpdo = [this, np](std::uint16_t number, std::span<const MappedValue> values) {
+    std::string line = "node " + std::to_string(np->id) + " rpdo " + std::to_string(number);
+    for (const auto& v : values) line += " " + v.name + "=" + format_value(v.value);
+    say(line);
+  };
+  n->device = std::make_unique<Device>(n->od, cfg,
+                                       [this, np](const can::Frame& f) {
+                                         channel_.send(f);
+                                         loopback(np, f);
+                                       },
+                                       std::move(cb));
+  nodes_.emplace(node, std::move(n));
+}
+
+void Simulator::restore(Node& n, std::uint16_t first, std::uint16_t last) {
+  for (const auto& [index, obj] : n.initial.objects()) {
+    if (index < first || index > last) continue;
+    for (const auto& [sub, entry] : obj.subs) (void)n.od.set(index, sub, entry.value);
+  }
+}
+
+void Simulator::start() {
+  if (running_) return;
+  running_ = true;
+  started_ = SteadyClock::now();
+  for (auto& [id, n] : nodes_) driver_.add(*n->device);
+  for (auto& [id, n] : nodes_) n->device->start(SteadyClock::now());
+  driver_.poke();
+  arm_values();
+  arm_emcy();
+}
+
+void Simulator::stop() {
+  if (!running_) return;
+  running_ = false;
+  value_timer_.cancel();
+  emcy_timer_.cancel();
+  for (auto& [id, n] : nodes_) driver_.remove(n->device.get());
+  local_.clear();
+}
+
+Device* Simulator::device(std::uint8_t node) {
+  auto it = nodes_.find(node);
+  return it == nodes_.end() ? nullptr : it->second->device.get();
+}
+
+bool Simulator::raise_emcy(std::uint8_t node, std::uint16_t code) {
+  Device* d = device(node);
+  if (d == nullptr || !d->raise_emcy(code, register_bits_for(code), SteadyClock::now())) return false;
+  say("node " + std::to_string(node) + " emcy " + hex4(code));
+  driver_.poke();
+  return true;
+}
+
+void Simulator::arm_values() {
+  if (opt_.tpdo_period.count() <= 0) return;
+  value_timer_.expires_after(opt_.tpdo_period);
+  value_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec || !running_) return;
+    tick_values();
+    arm_values();
+  });
+}
+
+void Simulator::arm_emcy() {
+  if (opt_.emcy_period.count() <= 0) return;
+  emcy_timer_.expires_after(opt_.emcy_period);
+  emcy_timer_.async_wait([this](const boost::system::error_code& ec) {
+    if (ec || !running_) return;
+    tick_emcy();
+    arm_emcy();
+  });
+}
+
+void Simulator::tick_values() {
+  ++ticks_;
+  const TimePoint now = SteadyClock::now();
+  const double t = std::chrono::duration<double>(now - started_).count();
+  for (auto& [id, n] : nodes_) {
+    if (n->device->state() != NmtState::Operational) continue;
+    for (const auto number : n->device->tpdo_numbers()) {
+      auto cfg = pdo::read_pdo(n->od, pdo::Direction::Transmit, number);
+      if (!cfg) continue;
+      for (const auto& e : cfg->entries) {
+        if (e.dummy) continue;
+        auto v = generate(n->od, n->profile, e.index, e.sub, t, ticks_);
+        if (!v) continue;
+        if (auto cur = n->od.get(e.index, e.sub); cur && *cur == *v) continue;
+        (void)n->device->set(e.index, e.sub, std::move(*v), now);
+      }
+    }
+  }
+  driver_.poke();
+}
+
+void Simulator::tick_emcy() {
+  const TimePoint now = SteadyClock::now();
+  for (auto& [id, n] : nodes_) {
+    const NmtState s = n->device->state();
+    if (s != NmtState::Operational && s != NmtState::PreOperational) continue;
+    if (n->emcy_active != 0) {
+      if (n->device->clear_emcy(n->emcy_active, now)) say("node " + std::to_string(id) + " emcy 0000");
+      n->emcy_active = 0;
+      continue;
+    }
+    const EmcyPlan& p = kPeriodicEmcy[n->emcy_next++ % kPeriodicEmcy.size()];
+    if (n->device->raise_emcy(p.code, p.bits, now)) {
+      n->emcy_active = p.code;
+      say("node " + std::to_string(id) + " emcy " + hex4(p.code));
+    }
+  }
+  driver_.poke();
+}
+
+void Simulator::loopback(const Node* from, const can::Frame& f) {
+  if (nodes_.size() < 2) return;
+  local_.emplace_back(from, f);
+  if (draining_posted_) return;
+  draining_posted_ = true;
+  boost::asio::post(io_, [this, alive = std::weak_ptr<bool>(alive_)] {
+    if (alive.expired()) return;
+    draining_posted_ = false;
+    // Frames sent while draining are appended and handled in this loop.
+    while (running_ && !local_.empty()) {
+      auto [sender, frame] = local_.front();
+      local_.pop_front();
+      const TimePoint now = SteadyClock::now();
+      for (auto& [id, n] : nodes_)
+        if (n.get() != sender) n->device->on_frame(frame, now);
+    }
+    driver_.poke();
+  });
+}
+
+}  // namespace canopen::sim
