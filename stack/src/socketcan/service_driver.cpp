@@ -54,9 +54,9 @@ void ServiceDriver::on_timer() {
   poke();
 }
 
-void ServiceDriver::deliver_locally(const can::Frame& f) {
-  local_.push_back(f);
-  local_.back().timestamp = can::Frame::Clock::now();
+void ServiceDriver::deliver_locally(const can::Frame& f, const void* only) {
+  local_.emplace_back(f, only);
+  local_.back().first.timestamp = can::Frame::Clock::now();
   if (drain_posted_) return;
   drain_posted_ = true;
   boost::asio::post(timer_.get_executor(), [this, alive = std::weak_ptr<bool>(alive_)] {
@@ -67,11 +67,13 @@ void ServiceDriver::deliver_locally(const can::Frame& f) {
 
 void ServiceDriver::drain_local() {
   drain_posted_ = false;
-  std::vector<can::Frame> frames;
+  std::vector<std::pair<can::Frame, const void*>> frames;
   frames.swap(local_);
   const TimePoint now = SteadyClock::now();
-  for (const auto& f : frames) {
-    for (std::size_t i = 0; i < entries_.size(); ++i) entries_[i].on_frame(f, now);
+  for (const auto& [f, only] : frames) {
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+      if (only == nullptr || entries_[i].id == only) entries_[i].on_frame(f, now);
+    }
   }
   poke();
 }

@@ -59,6 +59,20 @@ TEST(ServiceDriver, OwnBroadcastFramesAreDeliveredLocallyLaterNotReentrantly) {
   EXPECT_EQ(bus.pending(), 0U) << "local delivery puts nothing on the bus";
 }
 
+TEST(ServiceDriver, LocalDeliveryCanTargetOneService) {
+  boost::asio::io_context io;
+  can::MemoryBus bus;
+  auto ours = bus.attach("ours");
+  ServiceDriver driver(io, *ours);
+  Recorder sender, receiver;
+  driver.add(sender);
+  driver.add(receiver);
+  driver.deliver_locally(can::Frame::standard(0x080, {}), &receiver);
+  io.poll();
+  EXPECT_TRUE(sender.frames.empty());
+  EXPECT_EQ(receiver.frames.size(), 1U);
+}
+
 TEST(ServiceDriver, TimerFiresAtTheEarliestDeadline) {
   boost::asio::io_context io;
   can::MemoryBus bus;

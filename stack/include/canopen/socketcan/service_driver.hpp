@@ -51,8 +51,10 @@ class ServiceDriver {
   // received (a socket does not receive its own frames): e.g. an NMT
   // command to all nodes reaches the gateway's own NMT slave, a SYNC the
   // gateway produces drives its synchronous PDOs. Delivered later from the
-  // io_context (never re-entrantly), stamped with the wall time.
-  void deliver_locally(const can::Frame& f);
+  // io_context (never re-entrantly), stamped with the wall time, to every
+  // service or only to `only` (a service added before), so the sender need
+  // not see its own frame.
+  void deliver_locally(const can::Frame& f, const void* only = nullptr);
 
  private:
   struct Entry {
@@ -69,7 +71,7 @@ class ServiceDriver {
   std::vector<Entry> entries_;
   can::Channel::FrameHandler tap_;
   TimePoint armed_for_ = TimePoint::max();
-  std::vector<can::Frame> local_;
+  std::vector<std::pair<can::Frame, const void*>> local_;
   bool drain_posted_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
