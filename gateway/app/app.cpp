@@ -130,8 +130,8 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
     n.memory_devices = n.memory_bus->attach("devices");
     n.channel = n.memory_gateway.get();
   } else {
-    n.socket = canopen::socketcan::SocketCanChannel::open(io_, cfg.interface,
-                                                         canopen::socketcan::LinkMonitor::create(io_));
+    if (!monitor_) monitor_ = canopen::socketcan::LinkMonitor::create(io_);
+    n.socket = canopen::socketcan::SocketCanChannel::open(io_, cfg.interface, monitor_);
     n.channel = n.socket.get();
   }
 
@@ -292,7 +292,8 @@ void App::start() {
   }
   std::string nets;
   for (const auto& n : nets_) nets += (nets.empty() ? "" : ", ") + n->label;
-  log_.info("canopen-gateway " CANOPEN_GATEWAY_VERSION " started: " + nets + "; gateway id " + config_.gateway_id);
+  log_.info("canopen-gateway started: " + nets + "; version " CANOPEN_GATEWAY_VERSION ", gateway id " +
+            config_.gateway_id);
   log_.flush();
 }
 
@@ -371,6 +372,7 @@ void App::stop() {
       n->socket->close();
     }
   }
+  if (monitor_) monitor_->stop();
   log_.flush();
 }
 

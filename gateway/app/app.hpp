@@ -30,11 +30,11 @@ namespace canopen::eds {
 struct DeviceDescription;
 }
 
-namespace gateway {
-
-namespace http {
-class HttpServer;
+namespace canopen::socketcan {
+class LinkMonitor;
 }
+
+namespace gateway {
 
 class App {
  public:
@@ -91,6 +91,7 @@ class App {
   Logger& log_;
   StateCache cache_;
   EventPipeline pipeline_;
+  std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks
   std::vector<std::unique_ptr<Net>> nets_;
   struct Mqtt;
   std::unique_ptr<Mqtt> mqtt_;
