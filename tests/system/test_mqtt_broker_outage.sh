@@ -49,7 +49,7 @@ start_sub
 sleep 25
 kill -TERM "$SIM_PID"; wait "$SIM_PID" 2>/dev/null || true
 sleep 10
-python3 - "$T/mqtt.log" "$outage_start" "$outage_end" <<'PY' || fail "outage check failed (see above)"
+/usr/bin/python3 - "$T/mqtt.log" "$outage_start" "$outage_end" <<'PY' || fail "outage check failed (see above)"
 import json, sys, datetime
 seqs, in_window = [], 0
 start, end = float(sys.argv[2]), float(sys.argv[3])
@@ -88,7 +88,7 @@ start_sub
 GW_LOG=$T/gateway2.log
 start_gateway --config "$T/gw.yaml"
 sleep 15
-python3 - "$T/mqtt.log" "$kill_time" <<'PY' || fail "kill -9 check failed (see above)"
+/usr/bin/python3 - "$T/mqtt.log" "$kill_time" <<'PY' || fail "kill -9 check failed (see above)"
 import json, sys, datetime
 kill = float(sys.argv[2])
 run1, last_ts = [], 0.0
