@@ -15,7 +15,7 @@ MOSQ=$!
 trap 'kill $MOSQ 2>/dev/null; wait $MOSQ 2>/dev/null; rm -rf "$DIR"' EXIT
 for _ in $(seq 50); do mosquitto_pub -h 127.0.0.1 -p "$PORT" -t probe -m x 2>/dev/null && break; sleep 0.1; done
 "$BUILD/bench/mqtt_path_bench" "tcp://127.0.0.1:$PORT" "$EVENTS" "$DIR/queue" "$QOS" | tee "$DIR/gw.txt"
-/usr/bin//usr/bin/python3 "$(dirname "$0")/python_bridge.py" 127.0.0.1 "$PORT" "$EVENTS" "$QOS" | tee "$DIR/py.txt"
+/usr/bin/python3 "$(dirname "$0")/python_bridge.py" 127.0.0.1 "$PORT" "$EVENTS" "$QOS" | tee "$DIR/py.txt"
 gw=$(grep -oP 'CPU per event \(all threads, until acked\): \K[0-9.]+' "$DIR/gw.txt")
 py=$(grep -oP 'CPU per event \(all threads, until acked\): \K[0-9.]+' "$DIR/py.txt")
 /usr/bin/python3 -c "print(f'ratio: the python bridge uses {float($py)/float($gw):.1f}x the CPU per event of the gateway')"

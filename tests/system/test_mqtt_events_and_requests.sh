@@ -45,7 +45,7 @@ wait_for "$T/mqtt.log" "^canopen/$GW/1/5/emcy .*\"description\": ?\"[A-Za-z]" 10
 pass "EMCY with description: $(payloads "$T/mqtt.log" "canopen/$GW/1/5/emcy" | head -1)"
 
 # WebSocket: only node 5's TPDOs, through the client's filter.
-/usr/bin//usr/bin/python3 "$(dirname "$0")/ws_client.py" 127.0.0.1 8080 '{"networks":[1],"nodes":[5],"kinds":["tpdo"]}' 10 \
+/usr/bin/python3 "$(dirname "$0")/ws_client.py" 127.0.0.1 8080 '{"networks":[1],"nodes":[5],"kinds":["tpdo"]}' 10 \
   > "$T/ws.log" 2>&1 || fail "WebSocket client: $(cat "$T/ws.log")"
 [ "$(grep -c '"tpdo"' "$T/ws.log")" -ge 10 ] || fail "WebSocket: expected 10 tpdo events: $(cat "$T/ws.log")"
 grep -v '^#' "$T/ws.log" | grep -v '"node": *5[,}]' | grep -q . && fail "WebSocket filter let other nodes through"
