@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <set>
 
 #include "canopen/device.hpp"
 #include "canopen/eds/eds.hpp"
@@ -80,6 +81,7 @@ struct App::Net {
   std::unique_ptr<canopen::sim::Simulator> simulator;
   // Per node: when the last heartbeat went to MQTT (rate limit).
   std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
+  std::set<std::uint8_t> lost_nodes;  // for the own node's 8130h EMCY
 };
 
 struct App::Mqtt {
@@ -245,6 +247,7 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   });
   n.channel->on_bus_event([this, np](const canopen::can::BusEvent& ev) {
     np->network->report(ev);  // bus changes are part of the network's event sequence
+    own_node_emcy(*np, ev);
     std::string msg = np->label + " bus " + std::string(canopen::can::to_string(ev.previous)) + " -> " +
                       std::string(canopen::can::to_string(ev.state)) + " (" +
                       std::string(canopen::can::to_string(ev.cause));
@@ -376,7 +379,37 @@ void App::stop() {
   log_.flush();
 }
 
+// The gateway's own node reports its communication problems as EMCYs
+// (7.2.7.1, table 21; error register bit 4 "communication"): error passive
+// (8120h) while it lasts, receive overflow (8110h), recovered from bus-off
+// (8140h), a consumed heartbeat or guarded node lost (8130h) while any is.
+void App::own_node_emcy(Net& n, const canopen::can::BusEvent& ev) {
+  constexpr std::uint8_t kCommunication = 0x10;
+  const auto now = canopen::SteadyClock::now();
+  using canopen::can::BusState;
+  if (ev.state == BusState::ErrorPassive) n.own->raise_emcy(0x8120, kCommunication, now);
+  if (ev.state == BusState::ErrorActive) n.own->clear_emcy(0x8120, now);
+  if (ev.cause == canopen::can::BusEventCause::RxOverflow) {
+    n.own->raise_emcy(0x8110, kCommunication, now);
+    n.own->clear_emcy(0x8110, now);
+  }
+  if (ev.previous == BusState::BusOff && ev.state != BusState::BusOff && ev.state != BusState::Down) {
+    n.own->raise_emcy(0x8140, kCommunication, now);
+    n.own->clear_emcy(0x8140, now);
+  }
+  n.driver->poke();
+}
+
 void App::on_stack_event(Net& n, const canopen::Event& ev) {
+  if (const auto* s = std::get_if<canopen::NodeStateEvent>(&ev.body)) {
+    const auto now = canopen::SteadyClock::now();
+    if (s->cause == canopen::NodeStateEvent::Cause::Lost) {
+      if (n.lost_nodes.insert(s->node).second && n.lost_nodes.size() == 1) n.own->raise_emcy(0x8130, 0x10, now);
+    } else if (n.lost_nodes.erase(s->node) == 1 && n.lost_nodes.empty()) {
+      n.own->clear_emcy(0x8130, now);
+    }
+    if (n.driver) n.driver->poke();
+  }
   log_event(n, ev);
   pipeline_.on_event(n.number, ev);
 }

@@ -19,6 +19,7 @@
 
 #include <boost/asio/io_context.hpp>
 
+#include "canopen/can/bus_state.hpp"
 #include "config.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
@@ -80,6 +81,7 @@ class App {
   Net* net(std::uint32_t number);
   void open_network(std::uint32_t number, const NetworkConfig& cfg);
   void on_stack_event(Net& net, const canopen::Event& ev);
+  void own_node_emcy(Net& net, const canopen::can::BusEvent& ev);
   void log_event(const Net& net, const canopen::Event& ev);
   void sdo_read(Net& net, const ApiRequest& req, ReplyFn reply);
   void sdo_write(Net& net, const ApiRequest& req, ReplyFn reply);
