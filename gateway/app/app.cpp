@@ -178,9 +178,13 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   // NMT commands of the master reach the own node (node 0 or its ID), SYNC
   // and TIME of the own node reach the master side (synchronous RPDO data).
   auto* np = &n;
-  auto device_sink = [np](const Frame& f) {
+  // The own node's EMCYs go to the master side too, so they are published
+  // like any node's.
+  const std::uint32_t own_emcy = 0x80U + cfg.node_id;
+  auto device_sink = [np, own_emcy](const Frame& f) {
     np->channel->send(f);
-    if (is_sync_or_time(f) && np->driver) np->driver->deliver_locally(f, np->network.get());
+    const bool local = is_sync_or_time(f) || (!f.extended() && !f.remote() && f.id == own_emcy);
+    if (local && np->driver) np->driver->deliver_locally(f, np->network.get());
   };
   auto master_sink = [np](const Frame& f) {
     np->channel->send(f);
