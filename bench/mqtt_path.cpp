@@ -25,7 +25,7 @@
 #include "event_encoder.hpp"
 #include "log.hpp"
 #include "pipeline.hpp"
-#include "publisher.hpp"
+#include "mqtt/publisher.hpp"
 
 namespace {
 

@@ -12,10 +12,10 @@
 #include "canopen/socketcan/service_driver.hpp"
 #include "demo_devices.hpp"
 #include "event_encoder.hpp"
-#include "publisher.hpp"
+#include "mqtt/publisher.hpp"
 #include "request_codec.hpp"
-#include "asio_memory_bus.hpp"
-#include "simulator.hpp"
+#include "sim/asio_memory_bus.hpp"
+#include "sim/simulator.hpp"
 
 #ifndef CANOPEN_GATEWAY_VERSION
 #define CANOPEN_GATEWAY_VERSION "0.0.0"
