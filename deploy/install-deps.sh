@@ -14,7 +14,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libssl-dev
   # broker and CAN tools for tests and the demo
-  mosquitto mosquitto-clients can-utils iproute2 python3 python3-can
+  mosquitto mosquitto-clients can-utils iproute2 python3 python3-can python3-paho-mqtt
   # SocketCAN without host kernel support: user-mode Linux ships vcan & co.
   user-mode-linux kmod
 )

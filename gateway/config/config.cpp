@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -441,7 +442,14 @@ Config merge(Config c, const CliOptions& cli) {
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
   if (c.mqtt.client_id.empty()) c.mqtt.client_id = "canopen-gateway-" + c.gateway_id;
   if (cli.http) split_host_port(*cli.http, c.http.address, c.http.port);
-  if (c.state_dir.empty()) c.state_dir = "/var/lib/canopen-gateway";
+  if (c.state_dir.empty()) {
+    // A service runs as root (or with StateDirectory=); a user's run keeps
+    // its state in the user's home.
+    const char* home = std::getenv("HOME");
+    c.state_dir = (::geteuid() == 0 || home == nullptr)
+                      ? std::string("/var/lib/canopen-gateway")
+                      : (fs::path(home) / ".local/state/canopen-gateway").string();
+  }
   if (c.mqtt.queue_dir.empty()) c.mqtt.queue_dir = (fs::path(c.state_dir) / "mqtt-queue").string();
 
   const std::string where = c.source.empty() ? std::string("command line") : c.source;

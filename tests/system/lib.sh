@@ -71,3 +71,54 @@ start_candump() {
   done
   fail "candump on $iface did not start"
 }
+
+# ---- MQTT (a real mosquitto on loopback inside the UML kernel) -------------
+SIM=$BUILD_DIR/gateway/canopen-sim
+EDS_DIR=${SOURCE_DIR:-$(dirname "$0")/../..}/deploy/eds
+MOSQ_PORT=1883
+MOSQ_PID=
+
+# start_mosquitto [persistence-dir]: listens on 127.0.0.1:$MOSQ_PORT.
+start_mosquitto() {
+  local conf=$T/mosquitto.conf
+  {
+    echo "listener $MOSQ_PORT 127.0.0.1"
+    echo "allow_anonymous true"
+    if [ -n "${1:-}" ]; then
+      echo "persistence true"
+      echo "persistence_location $1/"
+      echo "autosave_interval 1"
+    else
+      echo "persistence false"
+    fi
+    echo "max_queued_messages 0"
+    echo "log_dest file $T/mosquitto.log"
+  } > "$conf"
+  /usr/sbin/mosquitto -c "$conf" > /dev/null 2>&1 &
+  MOSQ_PID=$!
+  local i=0
+  while [ $i -lt 100 ]; do
+    mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t probe -m x 2>/dev/null && return 0
+    sleep 0.1; i=$((i + 1))
+  done
+  fail "mosquitto did not start"
+}
+
+stop_mosquitto() {
+  [ -n "$MOSQ_PID" ] || return 0
+  kill -TERM "$MOSQ_PID" 2>/dev/null || true
+  wait "$MOSQ_PID" 2>/dev/null || true
+  MOSQ_PID=
+}
+
+# start_sim LOGFILE ARGS...: canopen-sim on vcan0, waits for "ready".
+start_sim() {
+  local log=$1; shift
+  "$SIM" --can vcan0 "$@" > "$log" 2>&1 &
+  SIM_PID=$!
+  wait_for "$log" "^ready" 20
+}
+
+# json_field FILE TOPIC_REGEX: payloads (after the topic) of matching lines
+# of a `mosquitto_sub -v` log.
+payloads() { grep -E "^$2 " "$1" | cut -d' ' -f2-; }

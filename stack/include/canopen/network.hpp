@@ -6,7 +6,10 @@
 // timer caused (a node lost).
 //
 // Services: NMT master (node tracking, heartbeat consumer, node guarding),
-// SDO client, PDO receiver, EMCY, SYNC and TIME consumers.
+// SDO client, boot-up configuration of nodes (CiA 302 spirit), PDO receiver
+// (the nodes' TPDOs), PDO producer (process data to the nodes' RPDOs, with
+// synchronous types driven by the SYNCs this network sees), EMCY, SYNC and
+// TIME consumers.
 //
 // The caller MUST pass every received frame to on_frame(), call on_time()
 // when now >= next_deadline() (re-read it after any call), and pass bus
@@ -17,6 +20,7 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -24,9 +28,11 @@
 #include "canopen/emcy/sync.hpp"
 #include "canopen/emcy/time.hpp"
 #include "canopen/events.hpp"
+#include "canopen/nmt/boot.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/pdo/receiver.hpp"
+#include "canopen/pdo/transmitter.hpp"
 #include "canopen/sdo/client.hpp"
 
 namespace canopen {
@@ -44,9 +50,18 @@ class Network {
   Network(const Network&) = delete;
   Network& operator=(const Network&) = delete;
 
-  // Describes a remote node (its EDS/DCF dictionary): its TPDOs are decoded.
-  // Returns problems that leave parts undecodable.
+  // Describes a remote node (its EDS/DCF dictionary): its TPDOs are decoded
+  // and its RPDOs can be written through rpdo(). Returns problems that leave
+  // parts undecodable.
   std::vector<std::string> add_node(std::uint8_t node, const od::ObjectDictionary& description);
+  // Boot-up configuration of `node` (nmt/boot.hpp): on each boot-up its
+  // identity is checked, its DCF written and it is started, as `config`
+  // says; every step is a BootConfigEvent in this network's stream.
+  // config.dcf MUST outlive the network.
+  bool configure_boot(std::uint8_t node, nmt::NodeBootConfig config);
+  // Sends an NMT command (node 0 = all) and, for start/stop/pre-operational,
+  // nothing else; the nodes' heartbeats report the result.
+  bool send_nmt(NmtCommand command, std::uint8_t node) { return nmt_.send_command(command, node); }
   // Re-reads 1016h of the own dictionary (after it changed).
   void configure_heartbeat_consumers();
 
@@ -59,6 +74,8 @@ class Network {
   nmt::NmtMaster& nmt() { return nmt_; }
   sdo::SdoClient& sdo() { return sdo_; }
   pdo::PdoReceiver& pdo() { return pdo_; }
+  // Process data to the nodes' RPDOs; call the caller's poke afterwards.
+  pdo::PdoTransmitter& rpdo() { return rpdo_; }
   std::uint64_t last_seq() const { return seq_; }
 
  private:
@@ -74,6 +91,9 @@ class Network {
   nmt::NmtMaster nmt_;
   sdo::SdoClient sdo_;
   pdo::PdoReceiver pdo_;
+  pdo::PdoTransmitter rpdo_;
+  std::unique_ptr<nmt::BootConfigurator> boot_;
+  TimePoint now_{};  // the latest time given to on_frame()/on_time()
   emcy::EmcyConsumer emcy_;
   emcy::SyncConsumer sync_;
   emcy::TimeConsumer time_;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include <boost/asio/post.hpp>
+
 namespace canopen::socketcan {
 
 ServiceDriver::ServiceDriver(boost::asio::io_context& io, can::Channel& channel) : channel_(channel), timer_(io) {
@@ -48,6 +50,30 @@ void ServiceDriver::on_timer() {
   const TimePoint now = SteadyClock::now();
   for (std::size_t i = 0; i < entries_.size(); ++i) {
     if (entries_[i].next_deadline() <= now) entries_[i].on_time(now);
+  }
+  poke();
+}
+
+void ServiceDriver::deliver_locally(const can::Frame& f, const void* only) {
+  local_.emplace_back(f, only);
+  local_.back().first.timestamp = can::Frame::Clock::now();
+  if (drain_posted_) return;
+  drain_posted_ = true;
+  boost::asio::post(timer_.get_executor(), [this, alive = std::weak_ptr<bool>(alive_)] {
+    if (alive.expired()) return;
+    drain_local();
+  });
+}
+
+void ServiceDriver::drain_local() {
+  drain_posted_ = false;
+  std::vector<std::pair<can::Frame, const void*>> frames;
+  frames.swap(local_);
+  const TimePoint now = SteadyClock::now();
+  for (const auto& [f, only] : frames) {
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+      if (only == nullptr || entries_[i].id == only) entries_[i].on_frame(f, now);
+    }
   }
   poke();
 }

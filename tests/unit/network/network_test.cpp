@@ -14,6 +14,7 @@
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/pdo/transmitter.hpp"
+#include "canopen/sdo/server.hpp"
 
 namespace canopen {
 namespace {
@@ -37,6 +38,8 @@ struct Rig {
   nmt::NmtSlave slave{dev_od, kDevice, [this](const can::Frame& f) { dev_ep->send(f); }};
   emcy::EmcyProducer emcy{dev_od, [this](const can::Frame& f) { dev_ep->send(f); }};
   pdo::PdoTransmitter tpdo{[this](const can::Frame& f) { dev_ep->send(f); }};
+  sdo::SdoServer server{dev_od, sdo::ServerConfig{kDevice}, [this](const can::Frame& f) { dev_ep->send(f); }};
+  std::vector<can::Frame> device_rx;  // what the device received
 
   Rig() {
     // Receive time of every frame: the wall clock at delivery.
@@ -45,7 +48,11 @@ struct Rig {
       for (const auto& f : fs) net.on_frame(f, clock.now());
     });
     dev_ep->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs) slave.on_frame(f, clock.now());
+      for (const auto& f : fs) {
+        device_rx.push_back(f);
+        slave.on_frame(f, clock.now());
+        server.on_frame(f, clock.now());
+      }
     });
     EXPECT_TRUE(net.add_node(kDevice, desc.od).empty());
     EXPECT_TRUE(tpdo.add_from(kDevice, pdo::Direction::Transmit, 1, dev_od, clock.now()));
@@ -56,6 +63,7 @@ struct Rig {
     wall += std::chrono::duration_cast<can::Frame::Clock::duration>(d);
     if (net.next_deadline() <= clock.now()) net.on_time(clock.now());
     if (slave.next_deadline() <= clock.now()) slave.on_time(clock.now());
+    if (server.next_deadline() <= clock.now()) server.on_time(clock.now());
     bus.deliver();
   }
   template <typename T>
@@ -123,6 +131,74 @@ TEST(Network, FrameEventsCarryTheFramesReceiveTimeAndTimerEventsTheWallTime) {
   EXPECT_EQ(std::get<NodeStateEvent>(states[1]->body).cause, NodeStateEvent::Cause::Lost);
   EXPECT_EQ(states[1]->timestamp, boot_time + 250ms);
   EXPECT_EQ(states[1]->seq, states[0]->seq + 1);
+}
+
+// CiA 302 spirit, through the network: a boot-up starts identification,
+// configuration from the DCF and NMT start; every step is an event of the
+// same stream, after the boot-up it follows.
+TEST(Network, BootUpConfigurationStepsJoinTheStream_7_2_8_3_3) {
+  Rig rig;
+  auto cfg = nmt::boot_config_from_dcf(rig.desc);
+  ASSERT_TRUE(rig.net.configure_boot(kDevice, cfg));
+  rig.slave.start(rig.clock.now());
+  for (int i = 0; i < 200 && rig.slave.state() != nmt::NmtSlave::State::Operational; ++i) rig.step(1ms);
+  EXPECT_EQ(rig.slave.state(), nmt::NmtSlave::State::Operational) << "started by the configurator";
+  std::vector<BootConfigEvent::Step> steps;
+  for (const auto* e : rig.of<BootConfigEvent>()) steps.push_back(std::get<BootConfigEvent>(e->body).step);
+  using S = BootConfigEvent::Step;
+  EXPECT_EQ(steps, (std::vector<S>{S::Identify, S::CheckIdentity, S::Configure, S::Start, S::Done}));
+  ASSERT_FALSE(rig.events.empty());
+  EXPECT_TRUE(std::holds_alternative<NodeStateEvent>(rig.events.front().body)) << "boot-up comes first";
+  for (std::size_t i = 0; i < rig.events.size(); ++i) EXPECT_EQ(rig.events[i].seq, i + 1);
+}
+
+TEST(Network, BootUpConfigurationOfASilentNodeFailsWithTimeout) {
+  Rig rig;
+  ASSERT_TRUE(rig.net.configure_boot(kDevice, nmt::boot_config_from_dcf(rig.desc)));
+  rig.slave.start(rig.clock.now());
+  ASSERT_TRUE(rig.bus.deliver_one());  // only the boot-up
+  rig.dev_ep->set_link_up(false);      // then the node says nothing more
+  for (int i = 0; i < 100; ++i) rig.step(100ms);
+  const auto boots = rig.of<BootConfigEvent>();
+  ASSERT_FALSE(boots.empty());
+  const auto& last = std::get<BootConfigEvent>(boots.back()->body);
+  EXPECT_EQ(last.step, BootConfigEvent::Step::Failed);
+  EXPECT_EQ(last.error, make_error_code(SdoAbort::Timeout));
+}
+
+// 7.2.2: the gateway writes process data to a node's RPDO; COB-ID and
+// mapping come from the node's description (RPDO2: 6040h u16 + 6060h i8).
+TEST(Network, ProcessDataGoesOutAsTheNodesRpdo_7_2_2) {
+  Rig rig;
+  const std::vector<MappedValue> values = {
+      {0x6040, 0, "", Value::of_unsigned(DataType::Unsigned16, 0x000F)},
+      {0x6060, 0, "", Value::of_signed(DataType::Integer8, 3)},
+  };
+  ASSERT_FALSE(rig.net.rpdo().set_values(kDevice, 2, values, rig.clock.now()));  // type 255: sent at once
+  rig.bus.deliver();
+  ASSERT_EQ(rig.device_rx.size(), 1U);
+  EXPECT_EQ(rig.device_rx[0].id, 0x300U + kDevice);
+  EXPECT_EQ(std::vector<std::uint8_t>(rig.device_rx[0].payload().begin(), rig.device_rx[0].payload().end()), (std::vector<std::uint8_t>{0x0F, 0x00, 0x03}));
+  EXPECT_EQ(rig.net.rpdo().set_value(kDevice, 2, 0x6041, 0, Value::of_unsigned(DataType::Unsigned16, 1),
+                                     rig.clock.now()),
+            make_error_code(SdoAbort::NotMappable))
+      << "an object the RPDO does not map is refused";
+}
+
+// 7.2.2.2: synchronous RPDO data (type 1) goes out on the SYNC the network sees.
+TEST(Network, SynchronousRpdoDataWaitsForTheSync_7_2_2_2) {
+  Rig rig;
+  ASSERT_FALSE(rig.dev_od.set(0x1400, 2, Value::of_unsigned(DataType::Unsigned8, 1)));
+  ASSERT_TRUE(rig.net.add_node(kDevice, rig.dev_od).empty());
+  ASSERT_FALSE(rig.net.rpdo().set_value(kDevice, 1, 0x6040, 0, Value::of_unsigned(DataType::Unsigned16, 6),
+                                        rig.clock.now()));
+  rig.bus.deliver();
+  EXPECT_TRUE(rig.device_rx.empty()) << "not before the SYNC";
+  rig.dev_ep->send(can::Frame::standard(0x080, {}));  // a SYNC from another producer
+  rig.bus.deliver();
+  ASSERT_EQ(rig.device_rx.size(), 1U);
+  EXPECT_EQ(rig.device_rx[0].id, 0x200U + kDevice);
+  EXPECT_EQ(std::vector<std::uint8_t>(rig.device_rx[0].payload().begin(), rig.device_rx[0].payload().end()), (std::vector<std::uint8_t>{0x06, 0x00}));
 }
 
 }  // namespace

@@ -47,6 +47,15 @@ class ServiceDriver {
   // Re-arms the timer for the earliest deadline.
   void poke();
 
+  // A frame this process sent that its own services must also see, as if
+  // received (a socket does not receive its own frames): e.g. an NMT
+  // command to all nodes reaches the gateway's own NMT slave, a SYNC the
+  // gateway produces drives its synchronous PDOs. Delivered later from the
+  // io_context (never re-entrantly), stamped with the wall time, to every
+  // service or only to `only` (a service added before), so the sender need
+  // not see its own frame.
+  void deliver_locally(const can::Frame& f, const void* only = nullptr);
+
  private:
   struct Entry {
     const void* id;
@@ -55,12 +64,15 @@ class ServiceDriver {
     std::function<TimePoint()> next_deadline;
   };
   void on_timer();
+  void drain_local();
 
   can::Channel& channel_;
   boost::asio::steady_timer timer_;
   std::vector<Entry> entries_;
   can::Channel::FrameHandler tap_;
   TimePoint armed_for_ = TimePoint::max();
+  std::vector<std::pair<can::Frame, const void*>> local_;
+  bool drain_posted_ = false;
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 

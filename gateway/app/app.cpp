@@ -1,0 +1,631 @@
+#include "app.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "canopen/device.hpp"
+#include "canopen/eds/eds.hpp"
+#include "canopen/network.hpp"
+#include "canopen/od/gateway_dictionary.hpp"
+#include "canopen/socketcan/channel.hpp"
+#include "canopen/socketcan/service_driver.hpp"
+#include "demo_devices.hpp"
+#include "event_encoder.hpp"
+#include "mqtt/publisher.hpp"
+#include "request_codec.hpp"
+#include "sim/asio_memory_bus.hpp"
+#include "sim/simulator.hpp"
+
+#ifndef CANOPEN_GATEWAY_VERSION
+#define CANOPEN_GATEWAY_VERSION "0.0.0"
+#endif
+
+namespace gateway {
+
+namespace {
+
+using canopen::can::Frame;
+
+// Frames of broadcast services the gateway produces itself that its own
+// services must see too (a socket does not receive its own frames).
+bool is_nmt(const Frame& f) { return !f.extended() && !f.remote() && f.id == 0x000; }
+bool is_sync_or_time(const Frame& f) { return !f.extended() && !f.remote() && (f.id == 0x080 || f.id == 0x100); }
+
+std::string hex4(unsigned v) {
+  char b[8];
+  std::snprintf(b, sizeof b, "%04Xh", v);
+  return b;
+}
+
+std::string pdo_text(const canopen::PdoEvent& ev) {
+  char buf[48];
+  std::string s;
+  if (ev.node == 0) {
+    std::snprintf(buf, sizeof buf, "unclaimed PDO %03Xh", static_cast<unsigned>(ev.cob_id));
+    s = buf;
+  } else {
+    s = "node " + std::to_string(ev.node) + " TPDO" + std::to_string(ev.number);
+  }
+  for (const auto& v : ev.values) {
+    std::snprintf(buf, sizeof buf, " %04Xh/%02X ", static_cast<unsigned>(v.index), static_cast<unsigned>(v.sub));
+    s += buf + v.name + "=" + canopen::format_value(v.value);
+  }
+  if (ev.values.empty() || ev.error) {
+    s += " raw ";
+    for (auto b : ev.raw) {
+      std::snprintf(buf, sizeof buf, "%02X", static_cast<unsigned>(b));
+      s += buf;
+    }
+  }
+  if (ev.error) s += " (" + *ev.error + ")";
+  return s;
+}
+
+}  // namespace
+
+struct App::Net {
+  std::uint32_t number = 0;
+  NetworkConfig cfg;
+  std::string label;  // "net 1 vcan0"
+  std::shared_ptr<canopen::socketcan::SocketCanChannel> socket;
+  std::unique_ptr<canopen::sim::AsioMemoryBus> memory_bus;
+  std::unique_ptr<canopen::sim::AsioMemoryChannel> memory_gateway, memory_devices;
+  canopen::can::Channel* channel = nullptr;
+  std::optional<canopen::od::ObjectDictionary> own_od;
+  std::unique_ptr<canopen::Device> own;
+  // std::map: stable addresses (the boot configurator keeps DCF pointers).
+  std::map<std::uint8_t, canopen::eds::DeviceDescription> descriptions;
+  std::unique_ptr<canopen::Network> network;
+  std::unique_ptr<canopen::socketcan::ServiceDriver> driver;
+  std::unique_ptr<canopen::sim::Simulator> simulator;
+  // Per node: when the last heartbeat went to MQTT (rate limit).
+  std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
+  std::set<std::uint8_t> lost_nodes;  // for the own node's 8130h EMCY
+};
+
+struct App::Mqtt {
+  std::unique_ptr<mqtt::MqttPublisher> publisher;
+};
+
+App::App(boost::asio::io_context& io, Config config, Logger& log)
+    : io_(io),
+      config_(std::move(config)),
+      log_(log),
+      pipeline_(
+          [ctx = EncodeContext{config_.gateway_id}](std::uint32_t network, const canopen::Event& ev) {
+            return encode_event(ev, network, ctx);
+          },
+          cache_) {
+  for (std::size_t i = 0; i < config_.networks.size(); ++i)
+    open_network(static_cast<std::uint32_t>(i + 1), config_.networks[i]);
+}
+
+App::~App() { stop(); }
+
+void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
+  auto net = std::make_unique<Net>();
+  Net& n = *net;
+  n.number = number;
+  n.cfg = cfg;
+  n.label = "net " + std::to_string(number) + " " + (cfg.simulated ? std::string("demo") : cfg.interface);
+
+  // Device descriptions first: a bad file is a configuration error.
+  std::vector<NodeConfig> nodes = cfg.nodes;
+  if (cfg.simulated) nodes = demo_node_configs();
+  for (const auto& node : nodes) {
+    if (node.eds.empty() && !cfg.simulated) continue;
+    try {
+      auto desc = cfg.simulated ? demo_description(node.id) : canopen::eds::load_device_description(node.eds, node.id);
+      for (const auto& w : desc.warnings) log_.debug(n.label + " node " + std::to_string(node.id) + " EDS: " + w);
+      n.descriptions.emplace(node.id, std::move(desc));
+    } catch (const canopen::eds::EdsError& e) {
+      throw ConfigError(e.what());
+    }
+  }
+  n.cfg.nodes = nodes;
+
+  // The channel: SocketCAN, or an in-process bus shared with simulated devices.
+  if (cfg.simulated) {
+    n.memory_bus = std::make_unique<canopen::sim::AsioMemoryBus>(io_);
+    n.memory_gateway = n.memory_bus->attach("gateway");
+    n.memory_devices = n.memory_bus->attach("devices");
+    n.channel = n.memory_gateway.get();
+  } else {
+    if (!monitor_) monitor_ = canopen::socketcan::LinkMonitor::create(io_);
+    n.socket = canopen::socketcan::SocketCanChannel::open(io_, cfg.interface, monitor_);
+    n.channel = n.socket.get();
+  }
+
+  // The gateway's own node: its dictionary says what it produces.
+  canopen::od::GatewayIdentity identity;
+  identity.software_version = CANOPEN_GATEWAY_VERSION;
+  canopen::od::GatewayDictionaryOptions od_options;
+  std::size_t consumers = 0;
+  for (const auto& node : n.cfg.nodes) consumers += node.heartbeat_consumer.count() > 0 ? 1 : 0;
+  od_options.heartbeat_consumers = static_cast<std::uint8_t>(std::clamp<std::size_t>(consumers, 8, 127));
+  n.own_od.emplace(canopen::od::make_gateway_dictionary(cfg.node_id, identity, od_options));
+  auto& od = *n.own_od;
+  using canopen::DataType;
+  using canopen::Value;
+  auto set = [&](std::uint16_t index, std::uint8_t sub, Value v, const char* what) {
+    if (auto ec = od.write(index, sub, canopen::encode(v)))
+      throw ConfigError(config_.source + ": " + n.label + ": " + what + ": " + ec.message());
+  };
+  set(0x1017, 0, Value::of_unsigned(DataType::Unsigned16, static_cast<std::uint64_t>(cfg.heartbeat_producer.count())),
+      "heartbeat-ms");
+  std::uint8_t slot = 1;
+  for (const auto& node : n.cfg.nodes) {
+    if (node.heartbeat_consumer.count() == 0) continue;
+    set(0x1016, slot++,
+        Value::of_unsigned(DataType::Unsigned32, std::uint64_t{node.id} << 16 |
+                                                     static_cast<std::uint64_t>(node.heartbeat_consumer.count())),
+        "heartbeat-consumer-ms");
+  }
+  if (cfg.sync.window.count() > 0)
+    set(0x1007, 0, Value::of_unsigned(DataType::Unsigned32, static_cast<std::uint64_t>(cfg.sync.window.count())),
+        "sync.window-us");
+  if (cfg.sync.period.count() > 0) {
+    set(0x1006, 0, Value::of_unsigned(DataType::Unsigned32, static_cast<std::uint64_t>(cfg.sync.period.count())),
+        "sync.period-us");
+    if (cfg.sync.counter_overflow != 0)
+      set(0x1019, 0, Value::of_unsigned(DataType::Unsigned8, cfg.sync.counter_overflow), "sync.counter-overflow");
+    set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, 0x40000080), "sync");  // bit 30: this node produces
+  }
+  if (cfg.time.produce) set(0x1012, 0, Value::of_unsigned(DataType::Unsigned32, 0x40000100), "time.produce");
+
+  // One sink per side. What one side broadcasts, the other sees locally:
+  // NMT commands of the master reach the own node (node 0 or its ID), SYNC
+  // and TIME of the own node reach the master side (synchronous RPDO data).
+  auto* np = &n;
+  // The own node's EMCYs go to the master side too, so they are published
+  // like any node's.
+  const std::uint32_t own_emcy = 0x80U + cfg.node_id;
+  auto device_sink = [np, own_emcy](const Frame& f) {
+    np->channel->send(f);
+    const bool local = is_sync_or_time(f) || (!f.extended() && !f.remote() && f.id == own_emcy);
+    if (local && np->driver) np->driver->deliver_locally(f, np->network.get());
+  };
+  auto master_sink = [np](const Frame& f) {
+    np->channel->send(f);
+    if (is_nmt(f) && np->driver) np->driver->deliver_locally(f, np->own.get());
+  };
+
+  canopen::DeviceConfig dev_cfg;
+  dev_cfg.node_id = cfg.node_id;
+  dev_cfg.time_period = std::chrono::duration_cast<canopen::Duration>(cfg.time.period);
+  dev_cfg.unix_ms = [] {
+    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
+        .count();
+  };
+  canopen::DeviceCallbacks dev_cb;
+  const std::string label = n.label;
+  dev_cb.on_state_change = [this, label](canopen::NmtState now_state, canopen::NmtState before) {
+    log_.info(label + " own node " + std::string(canopen::to_string(before)) + " -> " +
+              std::string(canopen::to_string(now_state)));
+    log_.flush();
+  };
+  n.own = std::make_unique<canopen::Device>(od, dev_cfg, device_sink, dev_cb);
+
+  n.network = std::make_unique<canopen::Network>(od, master_sink,
+                                                 [this, np](const canopen::Event& ev) { on_stack_event(*np, ev); });
+  for (const auto& node : n.cfg.nodes) {
+    auto it = n.descriptions.find(node.id);
+    if (it != n.descriptions.end()) {
+      for (const auto& problem : n.network->add_node(node.id, it->second.od))
+        log_.warn(n.label + " node " + std::to_string(node.id) + " PDO: " + problem);
+    }
+    if (node.guarding.guard_time.count() > 0) {
+      n.network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor,
+                                         canopen::SteadyClock::now());
+    }
+    if (node.boot) {
+      canopen::nmt::NodeBootConfig boot;
+      if (it != n.descriptions.end()) {
+        boot = canopen::nmt::boot_config_from_dcf(it->second);
+        if (!node.boot->configure) boot.dcf = nullptr;
+        if (!node.boot->check_identity) boot.device_type = boot.vendor_id = boot.product_code = boot.revision =
+            boot.serial = std::nullopt;
+      }
+      boot.start = node.boot->start;
+      n.network->configure_boot(node.id, boot);
+    }
+  }
+  cache_.add_network(number, cfg.simulated ? "demo" : cfg.interface, cfg.simulated);
+  for (const auto& node : n.cfg.nodes) cache_.add_configured_node(number, node.id, node.name);
+
+  n.driver = std::make_unique<canopen::socketcan::ServiceDriver>(io_, *n.channel);
+  n.driver->add(*n.own);
+  n.driver->add(*n.network);
+  // A write to the own 1016h (e.g. over SDO) changes which heartbeats are consumed.
+  od.observe(0x1016, [this, np](std::uint8_t) {
+    np->network->configure_heartbeat_consumers();
+    np->driver->poke();
+    log_.info(np->label + " heartbeat consumers reconfigured from 1016h");
+  });
+  n.driver->on_frames([this, np](std::span<const Frame> frames) {
+    if (log_.enabled(LogLevel::Debug)) {
+      for (const auto& f : frames) log_.debug(np->label + " rx " + canopen::can::to_string(f));
+    }
+    log_.flush();
+  });
+  n.channel->on_bus_event([this, np](const canopen::can::BusEvent& ev) {
+    np->network->report(ev);  // bus changes are part of the network's event sequence
+    own_node_emcy(*np, ev);
+    std::string msg = np->label + " bus " + std::string(canopen::can::to_string(ev.previous)) + " -> " +
+                      std::string(canopen::can::to_string(ev.state)) + " (" +
+                      std::string(canopen::can::to_string(ev.cause));
+    if (ev.cause == canopen::can::BusEventCause::RxOverflow) msg += ", " + std::to_string(ev.dropped) + " lost";
+    msg += ", tec " + std::to_string(ev.tx_error_counter) + ", rec " + std::to_string(ev.rx_error_counter) + ")";
+    const bool bad = ev.state != canopen::can::BusState::ErrorActive ||
+                     ev.cause == canopen::can::BusEventCause::RxOverflow;
+    log_.log(bad ? LogLevel::Warn : LogLevel::Info, msg);
+    log_.flush();
+  });
+
+  if (cfg.simulated) {
+    canopen::sim::SimulatorOptions so;
+    so.heartbeat = std::chrono::milliseconds(500);
+    so.tpdo_period = std::chrono::milliseconds(200);
+    so.emcy_period = std::chrono::milliseconds(20000);
+    n.simulator = std::make_unique<canopen::sim::Simulator>(
+        io_, *n.memory_devices, so, [this, label](std::string_view line) {
+          log_.debug(label + " simulator: " + std::string(line));
+        });
+    for (const auto& node : n.cfg.nodes) n.simulator->add_node(node.id, demo_description(node.id));
+  }
+  if (n.channel->state() == canopen::can::BusState::Down) log_.warn(n.label + " is down; waiting for it to come up");
+  nets_.push_back(std::move(net));
+}
+
+App::Net* App::net(std::uint32_t number) {
+  if (number == 0 || number > nets_.size()) return nullptr;
+  return nets_[number - 1].get();
+}
+
+const canopen::eds::DeviceDescription* App::description(std::uint32_t net_number, std::uint8_t node) const {
+  if (net_number == 0 || net_number > nets_.size()) return nullptr;
+  const auto& d = nets_[net_number - 1]->descriptions;
+  auto it = d.find(node);
+  return it == d.end() ? nullptr : &it->second;
+}
+
+void App::start() {
+  if (config_.mqtt.enabled) start_mqtt();
+  for (auto& n : nets_) {
+    n->own->start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
+    n->driver->poke();
+    if (n->simulator) n->simulator->start();
+  }
+  std::string nets;
+  for (const auto& n : nets_) nets += (nets.empty() ? "" : ", ") + n->label;
+  log_.info("canopen-gateway started: " + nets + "; version " CANOPEN_GATEWAY_VERSION ", gateway id " +
+            config_.gateway_id);
+  log_.flush();
+}
+
+void App::start_mqtt() {
+  mqtt_ = std::make_unique<Mqtt>();
+  mqtt::MqttConfig mc;
+  mc.server_uri = config_.mqtt.uri;
+  mc.client_id = config_.mqtt.client_id;
+  mc.username = config_.mqtt.username;
+  mc.password = config_.mqtt.password;
+  mc.ca_file = config_.mqtt.ca_file;
+  mc.cert_file = config_.mqtt.cert_file;
+  mc.key_file = config_.mqtt.key_file;
+  mc.gateway_id = config_.gateway_id;
+  mc.format = config_.mqtt.format == PayloadFormat::Protobuf ? mqtt::PayloadFormat::Protobuf : mqtt::PayloadFormat::Json;
+  for (std::size_t k = 0; k < mc.qos.size(); ++k)
+    mc.qos[k] = static_cast<std::uint8_t>(config_.mqtt.qos_for(static_cast<EventKind>(k)));
+  mc.queue.dir = config_.mqtt.queue_dir;
+  mc.queue.max_bytes = config_.mqtt.queue_max_bytes;
+  mc.queue.max_messages = config_.mqtt.queue_max_messages;
+  GatewayStatusInfo status;
+  status.version = CANOPEN_GATEWAY_VERSION;
+  status.node_id = nets_.empty() ? 127 : nets_.front()->cfg.node_id;
+  for (const auto& n : nets_) status.networks.push_back(n->number);
+  status.timestamp = std::chrono::system_clock::now();
+  const EncodeContext ctx{config_.gateway_id};
+  const bool proto = mc.format == mqtt::PayloadFormat::Protobuf;
+  status.online = true;
+  auto online = encode_status(status, ctx);
+  status.online = false;
+  auto offline = encode_status(status, ctx);
+  mc.online_payload = proto ? online->binary : online->json;
+  mc.offline_payload = proto ? offline->binary : offline->json;
+  mqtt_->publisher = std::make_unique<mqtt::MqttPublisher>(
+      io_, mc, log_, [this](const ApiRequest& req, ReplyFn reply) { handle_request(req, std::move(reply)); });
+  auto* pub = mqtt_->publisher.get();
+  const bool heartbeats = config_.mqtt.heartbeat;
+  const auto min_interval = config_.mqtt.heartbeat_min_interval;
+  pipeline_.add_consumer([this, pub, heartbeats, min_interval](const EncodedEventPtr& ev) {
+    if (ev->kind == EventKind::Heartbeat) {
+      if (!heartbeats) return;
+      if (min_interval.count() > 0) {
+        auto* n = net(ev->network);
+        if (n != nullptr) {
+          const auto now = std::chrono::steady_clock::now();
+          auto [it, fresh] = n->last_heartbeat_published.try_emplace(ev->node, now);
+          if (!fresh) {
+            if (now - it->second < min_interval) return;
+            it->second = now;
+          }
+        }
+      }
+    }
+    pub->publish(ev);
+  });
+  pub->start();
+  log_.info("MQTT: publishing to " + config_.mqtt.uri + " as canopen/" + config_.gateway_id + "/...");
+}
+
+void App::stop() {
+  if (stopped_) return;
+  stopped_ = true;
+  for (auto& n : nets_) {
+    if (n->simulator) n->simulator->stop();
+  }
+  if (mqtt_ && mqtt_->publisher) mqtt_->publisher->stop();
+  for (auto& n : nets_) {
+    n->driver.reset();
+    if (n->socket) {
+      log_.info(n->label + ": " + [&] {
+        const auto s = n->socket->stats();
+        return "rx " + std::to_string(s.rx_frames) + " frames, tx " + std::to_string(s.tx_frames) + ", rx dropped " +
+               std::to_string(s.rx_dropped) + ", tx dropped " + std::to_string(s.tx_dropped) + ", error frames " +
+               std::to_string(s.error_frames) + ", reopens " + std::to_string(s.reopens);
+      }());
+      n->socket->close();
+    }
+  }
+  if (monitor_) monitor_->stop();
+  log_.flush();
+}
+
+// The gateway's own node reports its communication problems as EMCYs
+// (7.2.7.1, table 21; error register bit 4 "communication"): error passive
+// (8120h) while it lasts, receive overflow (8110h), recovered from bus-off
+// (8140h), a consumed heartbeat or guarded node lost (8130h) while any is.
+void App::own_node_emcy(Net& n, const canopen::can::BusEvent& ev) {
+  constexpr std::uint8_t kCommunication = 0x10;
+  const auto now = canopen::SteadyClock::now();
+  using canopen::can::BusState;
+  if (ev.state == BusState::ErrorPassive) n.own->raise_emcy(0x8120, kCommunication, now);
+  if (ev.state == BusState::ErrorActive) n.own->clear_emcy(0x8120, now);
+  if (ev.cause == canopen::can::BusEventCause::RxOverflow) {
+    n.own->raise_emcy(0x8110, kCommunication, now);
+    n.own->clear_emcy(0x8110, now);
+  }
+  if (ev.previous == BusState::BusOff && ev.state != BusState::BusOff && ev.state != BusState::Down) {
+    n.own->raise_emcy(0x8140, kCommunication, now);
+    n.own->clear_emcy(0x8140, now);
+  }
+  n.driver->poke();
+}
+
+void App::on_stack_event(Net& n, const canopen::Event& ev) {
+  if (const auto* s = std::get_if<canopen::NodeStateEvent>(&ev.body)) {
+    const auto now = canopen::SteadyClock::now();
+    if (s->cause == canopen::NodeStateEvent::Cause::Lost) {
+      if (n.lost_nodes.insert(s->node).second && n.lost_nodes.size() == 1) n.own->raise_emcy(0x8130, 0x10, now);
+    } else if (n.lost_nodes.erase(s->node) == 1 && n.lost_nodes.empty()) {
+      n.own->clear_emcy(0x8130, now);
+    }
+    if (n.driver) n.driver->poke();
+  }
+  log_event(n, ev);
+  pipeline_.on_event(n.number, ev);
+}
+
+void App::log_event(const Net& n, const canopen::Event& ev) {
+  const std::string& prefix = n.label;
+  if (const auto* s = std::get_if<canopen::NodeStateEvent>(&ev.body)) {
+    static constexpr const char* kCause[] = {"boot-up", "heartbeat", "node guarding", "lost", "recovered"};
+    std::string msg = prefix + " node " + std::to_string(s->node) + " " +
+                      (s->state ? std::string(canopen::to_string(*s->state)) : std::string("lost")) + " (" +
+                      kCause[static_cast<int>(s->cause)] + ")";
+    log_.log(s->cause == canopen::NodeStateEvent::Cause::Lost ? LogLevel::Warn : LogLevel::Info, msg);
+    log_.flush();  // may come from a timer (lost), not only from a frame batch
+  } else if (const auto* h = std::get_if<canopen::HeartbeatEvent>(&ev.body)) {
+    if (log_.enabled(LogLevel::Trace))
+      log_.trace(prefix + " node " + std::to_string(h->node) + " heartbeat " + std::string(canopen::to_string(h->state)));
+  } else if (const auto* e = std::get_if<canopen::EmcyEvent>(&ev.body)) {
+    char code[48];
+    std::snprintf(code, sizeof code, "%04Xh, error register %02Xh", e->error_code, e->error_register);
+    log_.warn(prefix + " node " + std::to_string(e->node) + " EMCY " + code + ": " + e->description);
+  } else if (const auto* p = std::get_if<canopen::PdoEvent>(&ev.body)) {
+    const auto level = p->node == 0 ? LogLevel::Debug : p->error ? LogLevel::Warn : LogLevel::Debug;
+    if (log_.enabled(level)) log_.log(level, prefix + " " + pdo_text(*p));
+  } else if (const auto* b = std::get_if<canopen::BootConfigEvent>(&ev.body)) {
+    static constexpr const char* kStep[] = {"identify", "identity checked", "configure", "start", "done", "FAILED"};
+    std::string msg = prefix + " node " + std::to_string(b->node) + " boot-up configuration: " +
+                      kStep[static_cast<int>(b->step)];
+    if (!b->detail.empty()) msg += " (" + b->detail + ")";
+    if (b->error) msg += ": " + b->error.message();
+    log_.log(b->step == canopen::BootConfigEvent::Step::Failed ? LogLevel::Warn : LogLevel::Info, msg);
+    log_.flush();
+  }
+}
+
+// ---- requests ----------------------------------------------------------------
+
+void App::handle_request(const ApiRequest& req, ReplyFn reply) {
+  ReplyOptions opts;
+  opts.protobuf = req.protobuf;
+  Net* n = net(req.network);
+  if (n == nullptr) {
+    reply(problem(404, "network " + std::to_string(req.network) + " is not configured (networks are 1.." +
+                           std::to_string(nets_.size()) + ")",
+                  opts));
+    return;
+  }
+  if (req.node > 127 || (req.node == 0 && req.kind != RequestKind::Nmt)) {
+    reply(problem(400, "node-ID " + std::to_string(req.node) + " is out of range 1..127", opts));
+    return;
+  }
+  switch (req.kind) {
+    case RequestKind::SdoRead:
+      sdo_read(*n, req, std::move(reply));
+      break;
+    case RequestKind::SdoWrite:
+      sdo_write(*n, req, std::move(reply));
+      break;
+    case RequestKind::Nmt:
+      nmt(*n, req, std::move(reply));
+      break;
+  }
+}
+
+namespace {
+
+// The type of index/sub: the request's, else the node's EDS/DCF entry's.
+// DOMAIN (raw hex) when neither knows. Error reply when the EDS lacks it.
+std::optional<ApiReply> resolve_type(const canopen::eds::DeviceDescription* desc, std::uint16_t index,
+                                     std::uint8_t sub, std::optional<canopen::DataType> requested,
+                                     const ReplyOptions& opts, canopen::DataType& out,
+                                     const canopen::od::SubEntry** entry) {
+  *entry = desc != nullptr ? desc->od.find(index, sub) : nullptr;
+  if (requested) {
+    out = *requested;
+    return std::nullopt;
+  }
+  if (desc == nullptr) {
+    out = canopen::DataType::Domain;  // no EDS: raw bytes as hex
+    return std::nullopt;
+  }
+  if (*entry == nullptr) {
+    char what[40];
+    std::snprintf(what, sizeof what, "%04Xh sub %u", static_cast<unsigned>(index), static_cast<unsigned>(sub));
+    return problem(404, std::string("the node's EDS/DCF has no object ") + what + " (give ?type= to ask anyway)", opts);
+  }
+  out = (*entry)->type;
+  return std::nullopt;
+}
+
+}  // namespace
+
+void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
+  auto params = parse_sdo_read(req.body, req.protobuf);
+  ReplyOptions opts;
+  opts.protobuf = req.protobuf;
+  if (!params) {
+    reply(bad_request(params.error(), opts));
+    return;
+  }
+  opts.correlation_id = params->correlation_id;
+  const auto index = *params->index;
+  const auto sub = *params->sub;
+  canopen::DataType type{};
+  const canopen::od::SubEntry* entry = nullptr;
+  if (auto err = resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
+    reply(std::move(*err));
+    return;
+  }
+  canopen::sdo::Request r;
+  r.node = req.node;
+  r.index = index;
+  r.sub = sub;
+  ++counters_.sdo_requests;
+  r.on_done = [this, type, opts, reply](canopen::sdo::TransferResult&& res) {
+    if (!res.ok()) {
+      if (res.origin == canopen::sdo::Origin::Remote) ++counters_.sdo_aborts;
+      if (res.error == make_error_code(canopen::SdoAbort::Timeout)) ++counters_.sdo_timeouts;
+      reply(sdo_error_reply(res.error, res.origin == canopen::sdo::Origin::Remote, res.detail, opts));
+      return;
+    }
+    auto v = canopen::decode(type, res.data);
+    if (!v) {
+      reply(problem(502, "the device answered " + std::to_string(res.data.size()) + " bytes, which is not a " +
+                             std::string(canopen::cia309_name(type)) + ": " + v.error().detail,
+                    opts));
+      return;
+    }
+    reply(sdo_response(*v, opts));
+  };
+  auto submitted = n.network->sdo().upload(std::move(r), canopen::SteadyClock::now());
+  if (!submitted) {
+    reply(problem(429, "too many SDO requests queued for node " + std::to_string(req.node), opts));
+    return;
+  }
+  n.driver->poke();
+}
+
+void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
+  auto params = parse_sdo_write(req.body, req.protobuf);
+  ReplyOptions opts;
+  opts.protobuf = req.protobuf;
+  if (!params) {
+    reply(bad_request(params.error(), opts));
+    return;
+  }
+  opts.correlation_id = params->correlation_id;
+  const auto index = *params->index;
+  const auto sub = *params->sub;
+  canopen::DataType type{};
+  const canopen::od::SubEntry* entry = nullptr;
+  if (auto err = resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
+    reply(std::move(*err));
+    return;
+  }
+  // The value is checked against type and EDS limits before anything goes on the bus.
+  auto value = params->value_as(type);
+  if (!value) {
+    reply(bad_request(value.error(), opts));
+    return;
+  }
+  if (entry != nullptr) {
+    std::string detail;
+    if (auto ec = canopen::check_limits(*value, entry->low, entry->high, &detail)) {
+      reply(problem(400, "value out of range for " + hex4(index) + " sub " + std::to_string(sub) + ": " + detail, opts));
+      return;
+    }
+  }
+  canopen::sdo::Request r;
+  r.node = req.node;
+  r.index = index;
+  r.sub = sub;
+  ++counters_.sdo_requests;
+  const canopen::Value written = *value;
+  const std::string audit = "SDO write by " + (req.who.empty() ? std::string("anonymous") : req.who) + ": net " +
+                            std::to_string(n.number) + " node " + std::to_string(req.node) + " " + hex4(index) +
+                            " sub " + std::to_string(sub) + " = " + canopen::format_value(written);
+  r.on_done = [this, opts, reply, written, audit](canopen::sdo::TransferResult&& res) {
+    if (!res.ok()) {
+      if (res.origin == canopen::sdo::Origin::Remote) ++counters_.sdo_aborts;
+      if (res.error == make_error_code(canopen::SdoAbort::Timeout)) ++counters_.sdo_timeouts;
+      log_.info("audit: " + audit + ": " + res.error.message());
+      reply(sdo_error_reply(res.error, res.origin == canopen::sdo::Origin::Remote, res.detail, opts));
+      return;
+    }
+    log_.info("audit: " + audit + ": ok");
+    reply(sdo_response(written, opts));
+  };
+  auto submitted = n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now());
+  if (!submitted) {
+    reply(problem(429, "too many SDO requests queued for node " + std::to_string(req.node), opts));
+    return;
+  }
+  n.driver->poke();
+}
+
+void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
+  auto params = parse_nmt(req.body, req.protobuf);
+  ReplyOptions opts;
+  opts.protobuf = req.protobuf;
+  if (!params) {
+    reply(bad_request(params.error(), opts));
+    return;
+  }
+  opts.correlation_id = params->correlation_id;
+  ++counters_.nmt_commands;
+  n.network->send_nmt(params->command, req.node);
+  n.driver->poke();
+  log_.info("audit: NMT " + std::string(nmt_command_name(params->command)) + " by " +
+            (req.who.empty() ? std::string("anonymous") : req.who) + ": net " + std::to_string(n.number) + " node " +
+            std::to_string(req.node) + ": sent");
+  log_.flush();
+  reply(nmt_response(n.number, req.node, params->command, opts));
+}
+
+}  // namespace gateway

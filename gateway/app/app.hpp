@@ -1,0 +1,105 @@
+// The gateway process minus main(): every configured network (SocketCAN or
+// the simulated demo bus) with the gateway's own CANopen device on it and
+// the master-side services watching the other nodes, the event pipeline,
+// and the outputs (log, MQTT, WebSocket). Requests from MQTT (and REST) come
+// in through handle_request().
+//
+// Thread safety: everything runs on the one io_context given to the
+// constructor; call every method from that thread.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <boost/asio/io_context.hpp>
+
+#include "canopen/can/bus_state.hpp"
+#include "config.hpp"
+#include "event_message.hpp"
+#include "log.hpp"
+#include "pipeline.hpp"
+#include "requests.hpp"
+#include "state_cache.hpp"
+
+namespace canopen::eds {
+struct DeviceDescription;
+}
+
+namespace canopen::socketcan {
+class LinkMonitor;
+}
+
+namespace gateway {
+
+class App {
+ public:
+  // Opens every network and loads every EDS/DCF. Throws ConfigError for a
+  // bad EDS/DCF ("file:line: reason") and socketcan::CanUnavailable when an
+  // interface cannot be opened: configuration problems surface before
+  // anything starts.
+  App(boost::asio::io_context& io, Config config, Logger& log);
+  ~App();
+  App(const App&) = delete;
+  App& operator=(const App&) = delete;
+
+  // Boot-up of the own node on every network, simulated devices, MQTT.
+  void start();
+  // Offline status, MQTT flushed briefly, CAN closed. Afterwards the
+  // io_context runs out of work.
+  void stop();
+
+  // SDO read/write and NMT requests (MQTT; later REST). The reply comes
+  // later, on the io thread, exactly once.
+  void handle_request(const ApiRequest& request, ReplyFn reply);
+
+  // Extra consumer of every outgoing event (e.g. the WebSocket hub).
+  void add_consumer(EventPipeline::Consumer c) { pipeline_.add_consumer(std::move(c)); }
+
+  const Config& config() const { return config_; }
+  const StateCache& cache() const { return cache_; }
+  const EventPipeline& pipeline() const { return pipeline_; }
+  // The node's EDS/DCF on network `net`, if configured.
+  const canopen::eds::DeviceDescription* description(std::uint32_t net, std::uint8_t node) const;
+  std::chrono::steady_clock::time_point started_at() const { return started_at_; }
+
+  struct Counters {
+    std::uint64_t sdo_requests = 0;
+    std::uint64_t sdo_aborts = 0;
+    std::uint64_t sdo_timeouts = 0;
+    std::uint64_t nmt_commands = 0;
+  };
+  const Counters& counters() const { return counters_; }
+
+ private:
+  struct Net;
+  Net* net(std::uint32_t number);
+  void open_network(std::uint32_t number, const NetworkConfig& cfg);
+  void on_stack_event(Net& net, const canopen::Event& ev);
+  void own_node_emcy(Net& net, const canopen::can::BusEvent& ev);
+  void log_event(const Net& net, const canopen::Event& ev);
+  void sdo_read(Net& net, const ApiRequest& req, ReplyFn reply);
+  void sdo_write(Net& net, const ApiRequest& req, ReplyFn reply);
+  void nmt(Net& net, const ApiRequest& req, ReplyFn reply);
+  void start_mqtt();
+
+  boost::asio::io_context& io_;
+  Config config_;
+  Logger& log_;
+  StateCache cache_;
+  EventPipeline pipeline_;
+  std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks
+  std::vector<std::unique_ptr<Net>> nets_;
+  struct Mqtt;
+  std::unique_ptr<Mqtt> mqtt_;
+  Counters counters_;
+  std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();
+  bool stopped_ = false;
+};
+
+}  // namespace gateway

@@ -1,0 +1,19 @@
+// The devices of `canopen-gateway --demo`: EDS files built into the binary
+// (deploy/eds/), so the demo needs no files, hardware or kernel CAN.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "canopen/eds/eds.hpp"
+#include "config.hpp"
+
+namespace gateway {
+
+// Node 5: a CiA 402 drive; nodes 10 and 11: CiA 401 I/O modules. Each is
+// watched by heartbeat, identified and started by the gateway at boot-up.
+std::vector<NodeConfig> demo_node_configs();
+// The description of a demo node. Throws std::out_of_range for another node.
+canopen::eds::DeviceDescription demo_description(std::uint8_t node);
+
+}  // namespace gateway

@@ -1,0 +1,3 @@
+add_library(gateway_pipeline STATIC ${CMAKE_CURRENT_LIST_DIR}/pipeline.cpp ${CMAKE_CURRENT_LIST_DIR}/state_cache.cpp)
+target_include_directories(gateway_pipeline PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_link_libraries(gateway_pipeline PUBLIC gateway_lib canopen_network PRIVATE canopen_options)
