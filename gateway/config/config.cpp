@@ -314,7 +314,8 @@ std::string default_gateway_id() {
     const auto u = static_cast<unsigned char>(c);
     if (u <= 0x20 || u == 0x7F || c == '/' || c == '+' || c == '#') c = '_';
   }
-  return id.empty() ? std::string("gateway") : id;
+  // "(none)" is what a kernel without a host name reports.
+  return id.empty() || id == "(none)" || id == "localhost" ? std::string("gateway") : id;
 }
 
 Config parse_config(const std::string& yaml_text, const std::string& file) {

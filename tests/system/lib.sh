@@ -7,7 +7,14 @@ T=${TMPDIR:-/tmp}
 GW_LOG=$T/gateway.log
 GW_PID=
 
-fail() { echo "FAIL: $*"; [ -f "$GW_LOG" ] && { echo "--- gateway log (last 40 lines)"; tail -n 40 "$GW_LOG"; }; exit 1; }
+fail() {
+  echo "FAIL: $*"
+  [ -f "$GW_LOG" ] && { echo "--- gateway log (last 40 lines)"; tail -n 40 "$GW_LOG"; }
+  for extra in "$T/mosquitto.log" "$T/mqtt.log" "$T/sim.log"; do
+    [ -s "$extra" ] && { echo "--- $extra (last 15 lines)"; tail -n 15 "$extra"; }
+  done
+  exit 1
+}
 pass() { echo "PASS: $*"; }
 
 # wait_candump: waits for the candump started last; fails if it timed out.

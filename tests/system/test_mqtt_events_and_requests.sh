@@ -28,7 +28,7 @@ mqtt:
   qos: {default: 1}
 YAML
 start_gateway --config "$T/gw.yaml" --log-level debug
-wait_for "$T/mqtt.log" "^canopen/$GW/status .*\"online\": ?true" 10
+wait_for "$T/mqtt.log" "^canopen/$GW/status .*\"state\": ?\"online\"" 10
 pass "retained online status"
 
 start_sim "$T/sim.log" --node 5="$EDS_DIR/cia402-drive.eds" --node 10="$EDS_DIR/cia401-io-module.eds" \
@@ -48,7 +48,7 @@ pass "EMCY with description: $(payloads "$T/mqtt.log" "canopen/$GW/1/5/emcy" | h
 /usr/bin/python3 "$(dirname "$0")/ws_client.py" 127.0.0.1 8080 '{"networks":[1],"nodes":[5],"kinds":["tpdo"]}' 10 \
   > "$T/ws.log" 2>&1 || fail "WebSocket client: $(cat "$T/ws.log")"
 [ "$(grep -c '"tpdo"' "$T/ws.log")" -ge 10 ] || fail "WebSocket: expected 10 tpdo events: $(cat "$T/ws.log")"
-grep -v '^#' "$T/ws.log" | grep -v '"node": *5[,}]' | grep -q . && fail "WebSocket filter let other nodes through"
+grep -v '^#' "$T/ws.log" | grep -v '"node": *5[,}]' | grep -q . && fail "WebSocket filter let other nodes through: $(grep -v '"node": *5[,}]' "$T/ws.log" | head -3)"
 pass "WebSocket client got node 5 TPDOs only"
 
 # SDO read over MQTT 5 (response topic + correlation data) and 3.1.1 (in the body).
@@ -91,6 +91,8 @@ for line in open(sys.argv[1]):
     parts = topic.split("/")
     if len(parts) < 3 or parts[1] != sys.argv[2] or parts[2] != "1":
         continue
+    if topic.endswith(("/sdo/read", "/sdo/write", "/nmt")):
+        continue  # the requests this test published
     seqs.append(int(json.loads(payload)["seq"]))
 seqs.sort()
 gaps = [(a, b) for a, b in zip(seqs, seqs[1:]) if b != a + 1]

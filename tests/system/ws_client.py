@@ -65,6 +65,7 @@ def main():
         return 1
     send_frame(sock, 0x1, filt.encode())
     got = 0
+    subscribed = False  # events before the server confirms the filter are unfiltered
     while got < count:
         opcode, payload = recv_frame(sock)
         if opcode == 0x9:  # ping
@@ -74,8 +75,11 @@ def main():
             return 1
         elif opcode in (0x1, 0x2):
             text = payload.decode(errors="replace")
-            if '"filter"' in text or '"subscribed"' in text:  # control acknowledgement, not an event
+            if text.startswith('{"subscribed"') or text.startswith('{"error"'):  # control, not an event
                 print("#", text)
+                subscribed = subscribed or text.startswith('{"subscribed"')
+                continue
+            if not subscribed:
                 continue
             print(text)
             got += 1
