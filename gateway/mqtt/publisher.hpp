@@ -1,0 +1,150 @@
+// MQTT side of the gateway: publishes encoded events through a crash-safe
+// DiskQueue and takes SDO/NMT requests (../shared/api-contract.md).
+//
+// Delivery: publish() appends to the DiskQueue and returns; while connected
+// an in-flight window (Config::inflight_window) drains the queue in order,
+// and a message leaves the queue when the broker acknowledges it (PUBACK for
+// QoS 1, written to the socket for QoS 0). On a connection loss everything
+// unacknowledged is sent again, oldest first, after the reconnect; so order
+// holds across outages and a QoS 1 message is delivered at least once
+// (a duplicate only when a PUBACK was lost with the connection). The
+// session is clean (clean start / clean session): the queue, not the
+// broker or Paho, holds the backlog. Paho's own persistence is off. As a
+// safety net, if no PUBACK comes for 30 s while messages are in flight (or
+// messages are pending with none in flight) on a live connection, sending
+// restarts from the oldest unacked message (duplicates possible, no loss).
+// A message the broker refuses (MQTT 5 PUBACK reason >= 0x80) or Paho
+// refuses (bad topic) is dropped and counted in `rejected`, so one bad
+// message cannot block the queue.
+//
+// Connection: the gateway's own reconnect loop with exponential backoff
+// (reconnect_min doubling to reconnect_max). Will: `<status topic>` retained
+// offline_payload; after every connect online_payload is published retained
+// before the backlog. With mqtt_version 5, a broker refusing MQTT 5 (CONNACK
+// "unsupported protocol version", 0x84, or the 3.1.1 code 1) makes the
+// publisher fall back to 3.1.1 for the rest of its life.
+//
+// Requests: subscribes (QoS 1) to canopen/<gw>/+/+/sdo/read, .../sdo/write
+// and .../nmt. The network and node come from the topic (decimal; node 0
+// only for nmt). Reply address: MQTT 5 response topic + correlation data
+// (copied to the reply, which also carries a user property "status" with the
+// HTTP-style code); otherwise, or over 3.1.1, the JSON body's "replyTo"
+// (string) and "correlationId" (any JSON value): both are removed from the
+// body handed to the handler, and the reply, published to replyTo, gets
+// "correlationId" added when its body is a JSON object. A request without a
+// reply address is still executed, its reply only logged. Reply topics that
+// are themselves request topics of this gateway are refused (no loops).
+// A body with MQTT 5 content type "application/x-protobuf" is protobuf.
+//
+// Thread safety: every member function must be called on the thread that
+// runs `io` (the io thread). Paho's callbacks only post to `io`; all state
+// lives on the io thread. The io_context, logger and handler must outlive
+// the publisher. stop() (or the destructor) blocks the io thread for up to
+// its timeout while the offline status and DISCONNECT go out.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <boost/asio/io_context.hpp>
+
+#include "event_message.hpp"
+#include "log.hpp"
+#include "mqtt/disk_queue.hpp"
+#include "requests.hpp"
+
+namespace gateway::mqtt {
+
+enum class PayloadFormat : std::uint8_t { Json, Protobuf };
+
+constexpr std::size_t kEventKindCount = 10;  // EventKind values
+
+// Default QoS per EventKind: 1 for status, bus, state, emcy and boot (state
+// a subscriber must not miss), 0 for the high-rate heartbeat, tpdo, pdo,
+// sync and time.
+constexpr std::array<std::uint8_t, kEventKindCount> kDefaultQos = {1, 1, 1, 0, 1, 0, 0, 0, 0, 1};
+
+struct MqttConfig {
+  std::string server_uri;   // tcp:// ssl:// mqtt:// mqtts:// (host[:port])
+  std::string client_id;    // MUST be unique on the broker
+  std::string username;     // empty: none
+  std::string password;
+  // TLS (ssl:// and mqtts://): PEM files; empty ca_file = system trust store.
+  std::string ca_file, cert_file, key_file, key_password;
+  bool verify_server = true;
+  int mqtt_version = 5;  // 5: MQTT 5 with fallback to 3.1.1; 4: 3.1.1 only
+  std::chrono::seconds keepalive{30};
+  std::chrono::seconds connect_timeout{10};
+  std::chrono::milliseconds reconnect_min{250};
+  std::chrono::milliseconds reconnect_max{10'000};
+  std::string gateway_id;   // topics canopen/<gateway_id>/...
+  // The status payloads (GatewayStatus, proto3 JSON or binary as the caller
+  // wants); the defaults are minimal stand-ins.
+  std::string online_payload = R"({"state":"online"})";
+  std::string offline_payload = R"({"state":"offline"})";  // the Will
+  std::array<std::uint8_t, kEventKindCount> qos = kDefaultQos;  // by EventKind
+  PayloadFormat format = PayloadFormat::Json;
+  DiskQueueOptions queue;   // queue.dir MUST be set; one directory per publisher
+  // fdatasync of the queue, on the io thread (it blocks for the sync: on a
+  // slow disk choose a longer interval; 0 = never, page cache only).
+  std::chrono::milliseconds sync_interval{100};
+  std::size_t inflight_window = 64;
+  bool accept_requests = true;
+};
+
+class MqttPublisher {
+ public:
+  struct Counters {
+    std::uint64_t published = 0;        // accepted by publish()
+    std::uint64_t sent = 0;             // handed to Paho (resends included)
+    std::uint64_t acked = 0;            // confirmed by the broker
+    std::uint64_t dropped = 0;          // queue drops (policy) + rejected + write errors
+    std::uint64_t rejected = 0;         // refused by broker or Paho (bad topic, PUBACK >= 0x80)
+    std::uint64_t queue_depth = 0;
+    std::uint64_t queue_bytes = 0;
+    std::uint64_t in_flight = 0;
+    std::uint64_t connects = 0;         // successful connects
+    std::uint64_t reconnects = 0;       // connects after the first
+    std::uint64_t requests = 0;
+    std::uint64_t bad_requests = 0;     // bad topic or reply address
+    std::uint64_t replies = 0;
+    std::uint64_t replies_dropped = 0;  // not connected when the reply was ready
+    bool connected = false;
+    int mqtt_version = 0;               // of the current connection: 5 or 4
+  };
+
+  // Opens the DiskQueue (throws std::system_error) and validates the URI
+  // (throws std::invalid_argument). Does not connect: call start().
+  MqttPublisher(boost::asio::io_context& io, MqttConfig cfg, Logger& log, RequestHandler handler = {});
+  ~MqttPublisher();
+  MqttPublisher(const MqttPublisher&) = delete;
+  MqttPublisher& operator=(const MqttPublisher&) = delete;
+
+  void start();
+  // Publishes the offline status (retained), disconnects and stops
+  // reconnecting; messages still queued stay on disk for the next run.
+  void stop(std::chrono::milliseconds timeout = std::chrono::seconds(2));
+
+  // Never blocks on the network: queued, sent when the window allows.
+  void publish(const EncodedEventPtr& ev);
+  void publish(const EncodedEventPtr& ev, PayloadFormat format);
+  void publish(const QueuedMessage& m);
+
+  Counters counters() const;
+  const DiskQueue::Counters& queue_counters() const;
+  std::string status_topic() const;
+
+  struct Impl;
+
+ private:
+  std::shared_ptr<Impl> impl_;
+};
+
+// "tcp://h:1" stays; mqtt:// -> tcp://, mqtts:// -> ssl://. Throws
+// std::invalid_argument for any other scheme or an empty host.
+std::string normalize_server_uri(const std::string& uri);
+
+}  // namespace gateway::mqtt

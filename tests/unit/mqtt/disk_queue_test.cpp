@@ -1,0 +1,336 @@
+#include "mqtt/disk_queue.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace fs = std::filesystem;
+using gateway::mqtt::DiskQueue;
+using gateway::mqtt::DiskQueueOptions;
+using gateway::mqtt::QueuedMessage;
+
+namespace {
+
+class TempDir {
+ public:
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "dq-XXXXXX").string();
+    path_ = ::mkdtemp(tmpl.data());
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+QueuedMessage msg(int i, std::uint8_t qos = 1, bool retained = false) {
+  return QueuedMessage{"t/" + std::to_string(i), "payload-" + std::to_string(i), qos, retained};
+}
+
+DiskQueueOptions opts(const fs::path& dir) {
+  DiskQueueOptions o;
+  o.dir = dir;
+  return o;
+}
+
+std::vector<fs::path> segments(const fs::path& dir) {
+  std::vector<fs::path> out;
+  for (auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".seg") out.push_back(e.path());
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// Drains everything next() hands out, acking each.
+std::vector<std::string> drain_all(DiskQueue& q, bool ack = true) {
+  std::vector<std::string> out;
+  DiskQueue::Item it;
+  while (q.next(it)) {
+    out.push_back(it.msg.payload);
+    if (ack) q.ack(it.seq);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(DiskQueue, KeepsOrderAndFields) {
+  TempDir d;
+  DiskQueue q(opts(d.path()));
+  q.push(msg(1, 1, true));
+  q.push(msg(2, 0, false));
+  q.push(QueuedMessage{"t/empty", "", 1, false});
+  DiskQueue::Item it;
+  ASSERT_TRUE(q.next(it));
+  EXPECT_EQ(it.msg.topic, "t/1");
+  EXPECT_EQ(it.msg.payload, "payload-1");
+  EXPECT_EQ(it.msg.qos, 1);
+  EXPECT_TRUE(it.msg.retained);
+  ASSERT_TRUE(q.next(it));
+  EXPECT_EQ(it.msg.topic, "t/2");
+  EXPECT_EQ(it.msg.qos, 0);
+  EXPECT_FALSE(it.msg.retained);
+  ASSERT_TRUE(q.next(it));
+  EXPECT_EQ(it.msg.payload, "");
+  EXPECT_FALSE(q.next(it));
+  EXPECT_EQ(q.depth(), 3u);
+  EXPECT_EQ(q.counters().written, 3u);
+}
+
+TEST(DiskQueue, RewindResendsUnackedInOrder) {
+  TempDir d;
+  DiskQueue q(opts(d.path()));
+  for (int i = 0; i < 5; ++i) q.push(msg(i));
+  DiskQueue::Item it;
+  std::vector<std::uint64_t> seqs;
+  while (q.next(it)) seqs.push_back(it.seq);
+  ASSERT_EQ(seqs.size(), 5u);
+  EXPECT_TRUE(q.ack(seqs[0]));
+  EXPECT_TRUE(q.ack(seqs[2]));  // out of order: head stays at seqs[1]
+  EXPECT_FALSE(q.ack(seqs[2]));  // idempotent
+  EXPECT_EQ(q.head_seq(), seqs[1]);
+  q.rewind();
+  EXPECT_EQ(drain_all(q, false), (std::vector<std::string>{"payload-1", "payload-3", "payload-4"}));
+  EXPECT_EQ(q.counters().acked, 2u);
+  EXPECT_EQ(q.depth(), 3u);
+}
+
+TEST(DiskQueue, DropsOldestQos0FirstThenOldestQos1) {
+  TempDir d;
+  auto o = opts(d.path());
+  o.max_messages = 4;
+  DiskQueue q(o);
+  q.push(msg(1, 1));
+  q.push(msg(2, 0));
+  q.push(msg(3, 1));
+  q.push(msg(4, 0));
+  q.push(msg(5, 1));  // full: drops 2 (oldest QoS 0)
+  q.push(msg(6, 1));  // drops 4
+  q.push(msg(7, 1));  // no QoS 0 left: drops 1 (oldest QoS 1)
+  EXPECT_EQ(q.counters().dropped_qos0, 2u);
+  EXPECT_EQ(q.counters().dropped_qos1, 1u);
+  EXPECT_EQ(q.depth(), 4u);
+  EXPECT_EQ(drain_all(q), (std::vector<std::string>{"payload-3", "payload-5", "payload-6", "payload-7"}));
+  EXPECT_EQ(q.depth(), 0u);
+}
+
+TEST(DiskQueue, ByteBoundAndTooBig) {
+  TempDir d;
+  auto o = opts(d.path());
+  o.max_bytes = 1000;
+  DiskQueue q(o);
+  const std::string big(300, 'x');
+  for (int i = 0; i < 10; ++i) q.push(QueuedMessage{"t", big + std::to_string(i), 1, false});
+  EXPECT_LE(q.counters().bytes, 1000u);
+  EXPECT_EQ(q.depth(), 3u);  // 3 x ~322 bytes fit
+  EXPECT_EQ(q.counters().dropped_qos1, 7u);
+  EXPECT_EQ(q.push(QueuedMessage{"t", std::string(2000, 'y'), 1, false}), 0u);
+  EXPECT_EQ(q.counters().dropped_too_big, 1u);
+  auto got = drain_all(q);
+  ASSERT_EQ(got.size(), 3u);
+  EXPECT_EQ(got.back(), big + "9");
+}
+
+TEST(DiskQueue, ReopenAfterCleanCloseReplaysUnacked) {
+  TempDir d;
+  {
+    DiskQueue q(opts(d.path()));
+    for (int i = 0; i < 10; ++i) q.push(msg(i));
+    DiskQueue::Item it;
+    for (int i = 0; i < 4; ++i) {
+      ASSERT_TRUE(q.next(it));
+      q.ack(it.seq);
+    }
+  }
+  DiskQueue q(opts(d.path()));
+  EXPECT_EQ(q.counters().replayed, 6u);
+  EXPECT_EQ(q.depth(), 6u);
+  q.push(msg(10));
+  auto got = drain_all(q);
+  ASSERT_EQ(got.size(), 7u);
+  EXPECT_EQ(got.front(), "payload-4");
+  EXPECT_EQ(got.back(), "payload-10");
+}
+
+TEST(DiskQueue, AckPositionPersistsAcrossReopens) {
+  TempDir d;
+  std::uint64_t last_seq = 0;
+  {
+    DiskQueue q(opts(d.path()));
+    for (int i = 0; i < 3; ++i) q.push(msg(i));
+    drain_all(q);  // all acked
+  }
+  {
+    DiskQueue q(opts(d.path()));
+    EXPECT_EQ(q.depth(), 0u);
+    DiskQueue::Item it;
+    EXPECT_FALSE(q.next(it));
+    last_seq = q.push(msg(3));
+    EXPECT_EQ(last_seq, 4u);  // numbering continues
+  }
+  DiskQueue q(opts(d.path()));
+  EXPECT_EQ(drain_all(q), (std::vector<std::string>{"payload-3"}));
+}
+
+TEST(DiskQueue, TornLastRecordIsTruncated) {
+  TempDir d;
+  {
+    DiskQueue q(opts(d.path()));
+    for (int i = 0; i < 5; ++i) q.push(msg(i));
+  }
+  auto segs = segments(d.path());
+  ASSERT_EQ(segs.size(), 1u);
+  const auto size = fs::file_size(segs[0]);
+  fs::resize_file(segs[0], size - 5);  // cut into the last record
+  {
+    DiskQueue q(opts(d.path()));
+    EXPECT_EQ(q.depth(), 4u);
+    EXPECT_GT(q.counters().truncated_bytes, 0u);
+    q.push(msg(99));  // appends after the cut
+  }
+  DiskQueue q(opts(d.path()));
+  EXPECT_EQ(q.counters().truncated_bytes, 0u);
+  EXPECT_EQ(drain_all(q), (std::vector<std::string>{"payload-0", "payload-1", "payload-2", "payload-3", "payload-99"}));
+}
+
+TEST(DiskQueue, CorruptRecordEndsReplay) {
+  TempDir d;
+  {
+    DiskQueue q(opts(d.path()));
+    for (int i = 0; i < 5; ++i) q.push(msg(i));
+  }
+  auto seg = segments(d.path()).at(0);
+  {
+    std::fstream f(seg, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(-3, std::ios::end);  // flip a payload byte of the last record
+    f.put('#');
+  }
+  DiskQueue q(opts(d.path()));
+  EXPECT_EQ(q.depth(), 4u);
+  EXPECT_GT(q.counters().truncated_bytes, 0u);
+}
+
+TEST(DiskQueue, GarbageTailAndTornAckFile) {
+  TempDir d;
+  {
+    DiskQueue q(opts(d.path()));
+    for (int i = 0; i < 3; ++i) q.push(msg(i));
+    DiskQueue::Item it;
+    ASSERT_TRUE(q.next(it));
+    q.ack(it.seq);  // position 2, slot 1
+    ASSERT_TRUE(q.next(it));
+    q.ack(it.seq);  // position 3, slot 0
+  }
+  {
+    std::ofstream f(segments(d.path()).at(0), std::ios::app | std::ios::binary);
+    f << std::string("\xff\xff\xff\x7f garbage", 12);
+  }
+  {
+    // A torn write of the newest slot: the older one (position 2) is used,
+    // so message 1 comes again (a duplicate, never a loss).
+    std::fstream f(d.path() / "acked", std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(10);
+    f.put('\x55');
+  }
+  DiskQueue q(opts(d.path()));
+  EXPECT_EQ(drain_all(q), (std::vector<std::string>{"payload-1", "payload-2"}));
+}
+
+// A process that dies without running any destructor (as kill -9) loses
+// nothing it pushed: the records are in the page cache.
+TEST(DiskQueue, ProcessDeathWithoutCleanupLosesNothing) {
+  TempDir d;
+  pid_t pid = ::fork();
+  if (pid == 0) {
+    auto* q = new DiskQueue(opts(d.path()));  // never deleted: no close, no sync
+    for (int i = 0; i < 500; ++i) q->push(msg(i));
+    DiskQueue::Item it;
+    for (int i = 0; i < 100; ++i) {
+      if (!q->next(it)) ::_exit(3);
+      q->ack(it.seq);
+    }
+    ::_exit(0);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  ASSERT_EQ(WEXITSTATUS(status), 0);
+  DiskQueue q(opts(d.path()));
+  auto got = drain_all(q);
+  ASSERT_EQ(got.size(), 400u);
+  EXPECT_EQ(got.front(), "payload-100");
+  EXPECT_EQ(got.back(), "payload-499");
+}
+
+TEST(DiskQueue, SegmentsRollAndAreDeletedWhenAcked) {
+  TempDir d;
+  auto o = opts(d.path());
+  o.segment_bytes = 4096;
+  DiskQueue q(o);
+  for (int i = 0; i < 1000; ++i) q.push(msg(i));
+  EXPECT_GT(segments(d.path()).size(), 5u);
+  auto got = drain_all(q);
+  ASSERT_EQ(got.size(), 1000u);
+  q.push(msg(1000));  // rolls past the last full segment
+  DiskQueue::Item it;
+  ASSERT_TRUE(q.next(it));
+  q.ack(it.seq);
+  EXPECT_LE(segments(d.path()).size(), 2u);
+  EXPECT_LT(q.counters().disk_bytes, 2u * 4096u);
+}
+
+TEST(DiskQueue, DiskSpanStaysBoundedBehindAnOldQos1) {
+  TempDir d;
+  auto o = opts(d.path());
+  o.max_bytes = 8192;
+  o.segment_bytes = 4096;
+  DiskQueue q(o);
+  q.push(msg(0, 1));  // stays unacked at the head
+  DiskQueue::Item first;
+  ASSERT_TRUE(q.next(first));
+  for (int i = 1; i < 5000; ++i) q.push(msg(i, 0));  // QoS 0 flood, dropped behind it
+  EXPECT_LE(q.counters().disk_bytes, 2u * 8192u + 2u * 4096u);
+  EXPECT_GT(q.counters().dropped_span, 0u);
+}
+
+TEST(DiskQueue, LargeVolumeAcrossReopen) {
+  TempDir d;
+  constexpr int kN = 100'000;
+  {
+    DiskQueue q(opts(d.path()));
+    for (int i = 0; i < kN; ++i) q.push(msg(i, i % 3 == 0 ? 0 : 1));
+    // Ack the first half in order.
+    DiskQueue::Item it;
+    for (int i = 0; i < kN / 2; ++i) {
+      ASSERT_TRUE(q.next(it));
+      ASSERT_EQ(it.msg.payload, "payload-" + std::to_string(i));
+      q.ack(it.seq);
+    }
+    q.sync();
+  }
+  DiskQueue q(opts(d.path()));
+  EXPECT_EQ(q.depth(), static_cast<std::uint64_t>(kN / 2));
+  DiskQueue::Item it;
+  for (int i = kN / 2; i < kN; ++i) {
+    ASSERT_TRUE(q.next(it));
+    ASSERT_EQ(it.msg.payload, "payload-" + std::to_string(i));
+    ASSERT_EQ(it.msg.qos, i % 3 == 0 ? 0 : 1);
+    q.ack(it.seq);
+  }
+  EXPECT_FALSE(q.next(it));
+  EXPECT_EQ(q.depth(), 0u);
+  EXPECT_EQ(q.counters().dropped(), 0u);
+}
+
+TEST(DiskQueue, RefusesUnusableDirectory) {
+  EXPECT_THROW(DiskQueue(opts("/proc/self/no-such-dir/q")), std::system_error);
+}

@@ -1,0 +1,10 @@
+# MQTT: DiskQueue unit tests and publisher tests against a real mosquitto
+# started by the fixture (skipped when /usr/sbin/mosquitto is missing).
+canopen_unit_test(mqtt_tests SOURCES ${U}/mqtt/*_test.cpp LIBS gateway_mqtt)
+if(TARGET mqtt_tests)
+  add_executable(mqtt_publish_tool ${U}/mqtt/mqtt_publish_tool.cpp)
+  target_link_libraries(mqtt_publish_tool PRIVATE gateway_mqtt canopen_options)
+  target_compile_definitions(mqtt_tests PRIVATE
+    MQTT_PUBLISH_TOOL="$<TARGET_FILE:mqtt_publish_tool>")
+  add_dependencies(mqtt_tests mqtt_publish_tool)
+endif()

@@ -1,0 +1,432 @@
+// MqttPublisher against a real mosquitto started by the fixture.
+#include "mqtt/publisher.hpp"
+
+#include <gtest/gtest.h>
+
+#include <boost/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdio>
+
+#include "mqtt_support.hpp"
+
+using namespace mqtt_test;
+using gateway::EncodedEvent;
+using gateway::EncodedEventPtr;
+using gateway::EventKind;
+using gateway::mqtt::MqttConfig;
+using gateway::mqtt::MqttPublisher;
+
+namespace {
+
+constexpr const char* kGw = "gw1";
+
+EncodedEventPtr make_event(EventKind k, std::string topic, std::string json, bool retained) {
+  auto e = std::make_shared<EncodedEvent>();
+  e->kind = k;
+  e->topic = std::move(topic);
+  e->json = std::move(json);
+  e->binary = "\x08\x01";
+  e->retained = retained;
+  return e;
+}
+
+class MqttPublisherTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (!have_mosquitto()) GTEST_SKIP() << "no " << kMosquitto;
+  }
+
+  void start_broker(bool persistence = false) {
+    broker_.emplace(persistence);
+    ASSERT_TRUE(broker_->start()) << broker_->log();
+  }
+
+  MqttConfig config() {
+    MqttConfig c;
+    c.server_uri = "mqtt://127.0.0.1:" + std::to_string(broker_->port());
+    c.client_id = "gateway-under-test";
+    c.gateway_id = kGw;
+    c.queue.dir = queue_dir_.path() / "q";
+    c.reconnect_min = 100ms;
+    c.reconnect_max = 500ms;
+    return c;
+  }
+
+  void start_publisher(MqttConfig c) {
+    io_.call([&] {
+      pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_, [this](const gateway::ApiRequest& r, gateway::ReplyFn reply) {
+        requests_.push_back(r);
+        ++request_count_;
+        boost::json::object o;
+        o["value"] = 42;
+        o["echo"] = r.body;
+        reply(gateway::ApiReply{200, boost::json::serialize(o), "application/json"});
+      });
+      pub_->start();
+    });
+    ASSERT_TRUE(eventually([&] { return counters().connected; })) << broker_->log();
+  }
+
+  MqttPublisher::Counters counters() {
+    return io_.call([&] { return pub_->counters(); });
+  }
+
+  void publish(EncodedEventPtr e) {
+    io_.call([&] { pub_->publish(e); });
+  }
+
+  void TearDown() override {
+    if (pub_) io_.call([&] { pub_.reset(); });
+  }
+
+  TempDir queue_dir_;
+  std::optional<Broker> broker_;
+  gateway::Logger log_{gateway::LogLevel::Warn};
+  IoThread io_;
+  std::unique_ptr<MqttPublisher> pub_;
+  std::vector<gateway::ApiRequest> requests_;  // io thread
+  std::atomic<int> request_count_{0};
+};
+
+std::vector<std::string> payloads(const std::vector<::mqtt::const_message_ptr>& msgs) {
+  std::vector<std::string> out;
+  for (auto& m : msgs) out.push_back(m->get_payload_str());
+  return out;
+}
+
+std::vector<std::string> numbers(int from, int to) {
+  std::vector<std::string> out;
+  for (int i = from; i < to; ++i) out.push_back(std::to_string(i));
+  return out;
+}
+
+// "" when got is exactly "0".."n-1"; else where it first differs, and how
+// many duplicates and gaps there are.
+std::string sequence_problem(const std::vector<std::string>& got, int n) {
+  if (got == numbers(0, n)) return "";
+  std::string out = "received " + std::to_string(got.size()) + " of " + std::to_string(n);
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    if (got[i] != std::to_string(i)) {
+      out += "; first difference at " + std::to_string(i) + ": " + got[i];
+      for (std::size_t j = i; j < std::min(got.size(), i + 8); ++j) out += " " + got[j];
+      break;
+    }
+  }
+  std::vector<int> seen(static_cast<std::size_t>(n), 0);
+  int dups = 0, bad = 0;
+  for (auto& g : got) {
+    int v = std::atoi(g.c_str());
+    if (v < 0 || v >= n) { ++bad; continue; }
+    if (seen[static_cast<std::size_t>(v)]++ > 0) ++dups;
+  }
+  out += "; duplicates " + std::to_string(dups) + ", missing " +
+         std::to_string(std::count(seen.begin(), seen.end(), 0)) + ", unexpected " + std::to_string(bad);
+  return out;
+}
+
+}  // namespace
+
+TEST_F(MqttPublisherTest, NormalizesUris) {
+  EXPECT_EQ(gateway::mqtt::normalize_server_uri("mqtt://h:1883"), "tcp://h:1883");
+  EXPECT_EQ(gateway::mqtt::normalize_server_uri("mqtts://h"), "ssl://h");
+  EXPECT_EQ(gateway::mqtt::normalize_server_uri("ssl://h:8883"), "ssl://h:8883");
+  EXPECT_THROW(gateway::mqtt::normalize_server_uri("http://h"), std::invalid_argument);
+  EXPECT_THROW(gateway::mqtt::normalize_server_uri("tcp://"), std::invalid_argument);
+}
+
+TEST_F(MqttPublisherTest, EventsArriveInOrderWithTopicsAndRetainedFlags) {
+  start_broker();
+  Subscriber live(broker_->uri(), "live", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(live.connect());
+  start_publisher(config());
+  EXPECT_EQ(counters().mqtt_version, 5);
+
+  publish(make_event(EventKind::State, "canopen/gw1/1/5/state", R"({"state":"operational"})", true));
+  for (int i = 0; i < 300; ++i)
+    publish(make_event(EventKind::Tpdo, "canopen/gw1/1/5/tpdo/1", std::to_string(i), false));
+  publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", R"({"errorCode":4096})", false));
+  ASSERT_TRUE(live.wait_topic("canopen/gw1/1/5/emcy", 15s));
+  EXPECT_EQ(payloads(live.on_topic("canopen/gw1/1/5/tpdo/1")), numbers(0, 300));
+  ASSERT_EQ(live.on_topic("canopen/gw1/1/5/state").size(), 1u);
+  EXPECT_TRUE(eventually([&] { return counters().queue_depth == 0; }));
+
+  // A late subscriber gets the retained state (flag set) and the online
+  // status, but none of the non-retained events.
+  Subscriber late(broker_->uri(), "late", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(late.connect());
+  ASSERT_TRUE(late.wait_topic("canopen/gw1/1/5/state", 5s));
+  ASSERT_TRUE(late.wait_topic("canopen/gw1/status", 5s));
+  for (auto& m : late.messages()) {
+    EXPECT_TRUE(m->is_retained()) << m->get_topic();
+    EXPECT_NE(m->get_topic(), "canopen/gw1/1/5/tpdo/1");
+  }
+  EXPECT_EQ(late.on_topic("canopen/gw1/status").at(0)->get_payload_str(), R"({"state":"online"})");
+  auto c = counters();
+  EXPECT_EQ(c.published, 302u);
+  EXPECT_EQ(c.acked, 302u);
+  EXPECT_EQ(c.dropped, 0u);
+}
+
+TEST_F(MqttPublisherTest, ProtobufPayloadWhenAsked) {
+  start_broker();
+  Subscriber live(broker_->uri(), "live", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(live.connect());
+  auto c = config();
+  c.format = gateway::mqtt::PayloadFormat::Protobuf;
+  start_publisher(c);
+  publish(make_event(EventKind::Heartbeat, "canopen/gw1/1/5/heartbeat", "{}", false));
+  ASSERT_TRUE(live.wait_topic("canopen/gw1/1/5/heartbeat", 10s));
+  EXPECT_EQ(live.on_topic("canopen/gw1/1/5/heartbeat").at(0)->get_payload_str(), "\x08\x01");
+}
+
+TEST_F(MqttPublisherTest, CleanStopPublishesOfflineStatus) {
+  start_broker();
+  start_publisher(config());
+  Subscriber sub(broker_->uri(), "watch", {"canopen/gw1/status"}, {});
+  ASSERT_TRUE(sub.connect());
+  ASSERT_TRUE(sub.wait_count(1, 5s));
+  EXPECT_EQ(sub.messages().at(0)->get_payload_str(), R"({"state":"online"})");
+  io_.call([&] { pub_->stop(); });
+  ASSERT_TRUE(sub.wait_count(2, 5s));
+  EXPECT_EQ(sub.messages().at(1)->get_payload_str(), R"({"state":"offline"})");
+}
+
+TEST_F(MqttPublisherTest, RequestOverMqtt5WithResponseTopicAndCorrelationData) {
+  start_broker();
+  start_publisher(config());
+  Subscriber client(broker_->uri(), "requester5", {"replies/me"}, {MQTTVERSION_5, true});
+  ASSERT_TRUE(client.connect());
+
+  auto msg = ::mqtt::make_message("canopen/gw1/2/5/sdo/read", R"({"index":"1017","subIndex":0})", 1, false);
+  msg->set_properties({::mqtt::property(::mqtt::property::RESPONSE_TOPIC, "replies/me"),
+                       ::mqtt::property(::mqtt::property::CORRELATION_DATA, std::string("corr\0-1", 7))});
+  client.client().publish(msg)->wait_for(5s);
+  ASSERT_TRUE(client.wait_count(1, 10s));
+  auto reply = client.messages().at(0);
+  const auto& props = reply->get_properties();
+  ASSERT_TRUE(props.contains(::mqtt::property::CORRELATION_DATA));
+  EXPECT_EQ(::mqtt::get<std::string>(props, ::mqtt::property::CORRELATION_DATA), std::string("corr\0-1", 7));
+  ASSERT_TRUE(props.contains(::mqtt::property::USER_PROPERTY));
+  auto status = ::mqtt::get<::mqtt::string_pair>(props, ::mqtt::property::USER_PROPERTY);
+  EXPECT_EQ(std::get<0>(status), "status");
+  EXPECT_EQ(std::get<1>(status), "200");
+  auto body = boost::json::parse(reply->get_payload_str()).as_object();
+  EXPECT_EQ(body.at("value").as_int64(), 42);
+
+  auto reqs = io_.call([&] { return requests_; });
+  ASSERT_EQ(reqs.size(), 1u);
+  EXPECT_EQ(reqs[0].kind, gateway::RequestKind::SdoRead);
+  EXPECT_EQ(reqs[0].network, 2u);
+  EXPECT_EQ(reqs[0].node, 5);
+  EXPECT_EQ(reqs[0].body, R"({"index":"1017","subIndex":0})");
+}
+
+TEST_F(MqttPublisherTest, RequestOverMqtt311WithReplyToInBody) {
+  start_broker();
+  start_publisher(config());
+  Subscriber client(broker_->uri(), "requester3", {"replies/v3"}, {});
+  ASSERT_TRUE(client.connect());
+
+  client.client()
+      .publish(::mqtt::make_message("canopen/gw1/1/0/nmt",
+                                    R"({"command":"start","replyTo":"replies/v3","correlationId":"c-7"})", 1, false))
+      ->wait_for(5s);
+  client.client()
+      .publish(::mqtt::make_message("canopen/gw1/1/9/sdo/write",
+                                    R"({"value":5,"type":"u8","replyTo":"replies/v3","correlationId":8})", 1, false))
+      ->wait_for(5s);
+  ASSERT_TRUE(client.wait_count(2, 10s));
+  auto r0 = boost::json::parse(client.messages().at(0)->get_payload_str()).as_object();
+  EXPECT_EQ(r0.at("correlationId").as_string(), "c-7");
+  EXPECT_EQ(r0.at("value").as_int64(), 42);
+  auto r1 = boost::json::parse(client.messages().at(1)->get_payload_str()).as_object();
+  EXPECT_EQ(r1.at("correlationId").as_int64(), 8);
+
+  auto reqs = io_.call([&] { return requests_; });
+  ASSERT_EQ(reqs.size(), 2u);
+  EXPECT_EQ(reqs[0].kind, gateway::RequestKind::Nmt);
+  EXPECT_EQ(reqs[0].node, 0);
+  EXPECT_EQ(reqs[0].body, R"({"command":"start"})");  // reply fields removed
+  EXPECT_EQ(reqs[1].kind, gateway::RequestKind::SdoWrite);
+  EXPECT_EQ(reqs[1].node, 9);
+}
+
+TEST_F(MqttPublisherTest, BadRequestsAreAnsweredOrLoggedNeverCrash) {
+  start_broker();
+  start_publisher(config());
+  Subscriber client(broker_->uri(), "bad", {"replies/bad"}, {});
+  ASSERT_TRUE(client.connect());
+  auto send = [&](const std::string& topic, const std::string& body) {
+    client.client().publish(::mqtt::make_message(topic, body, 1, false))->wait_for(5s);
+  };
+  const std::string rt = R"({"replyTo":"replies/bad","correlationId":1})";
+  send("canopen/gw1/x/5/sdo/read", rt);       // bad network
+  send("canopen/gw1/1/200/nmt", rt);          // node out of range
+  send("canopen/gw1/1/0/sdo/read", rt);       // node 0 only for nmt
+  send("canopen/gw1/1/5/sdo/read", "\xff\xfe not json");  // no reply address: executed, logged
+  send("canopen/gw1/1/5/nmt", R"({"replyTo":"canopen/gw1/1/5/nmt"})");  // loop refused, executed
+  send("canopen/gw1/1/5/nmt", R"({"replyTo":"a/+/b"})");  // wildcard refused
+  send("canopen/gw1/1/5/nmt", "[1,2]");
+  ASSERT_TRUE(client.wait_count(3, 10s));
+  for (auto& m : client.messages()) {
+    auto o = boost::json::parse(m->get_payload_str()).as_object();
+    EXPECT_EQ(o.at("status").as_int64(), 400);
+  }
+  // The handler saw the four well-addressed ones.
+  EXPECT_TRUE(eventually([&] { return request_count_ == 4; }, 10s));
+  // Still serving.
+  send("canopen/gw1/1/5/nmt", R"({"command":"stop","replyTo":"replies/bad","correlationId":"ok"})");
+  ASSERT_TRUE(client.wait_count(4, 10s));
+  EXPECT_EQ(boost::json::parse(client.messages().at(3)->get_payload_str()).as_object().at("correlationId").as_string(),
+            "ok");
+  EXPECT_GE(counters().bad_requests, 5u);
+}
+
+// Messages published while the broker is down are held by the publisher's
+// DiskQueue and arrive exactly once, in order, after the broker is back.
+// The subscriber has a persistent session on a broker with persistence, so
+// its subscription exists as soon as the broker restarts.
+TEST_F(MqttPublisherTest, BrokerOutageLosesNothingAndKeepsOrder) {
+  start_broker(true);
+  Subscriber sub(broker_->uri(), "outage-sub", {"canopen/gw1/1/5/tpdo/1"}, {MQTTVERSION_3_1_1, false});
+  ASSERT_TRUE(sub.connect());
+  start_publisher(config());
+
+  for (int i = 0; i < 100; ++i) publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/tpdo/1", std::to_string(i), false));
+  ASSERT_TRUE(sub.wait_count(100, 10s));
+  // Every PUBACK in, so a resend after the outage would be a real duplicate.
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0; }, 10s));
+
+  broker_->stop();
+  ASSERT_TRUE(eventually([&] { return !counters().connected; }, 10s));
+  // 3000 QoS 1 messages at ~1000/s while the broker is down.
+  constexpr int kN = 3100;
+  for (int i = 100; i < kN; i += 10) {
+    io_.call([&] {
+      for (int j = i; j < i + 10; ++j)
+        pub_->publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/tpdo/1", std::to_string(j), false));
+    });
+    std::this_thread::sleep_for(10ms);
+  }
+  EXPECT_GE(counters().queue_depth, static_cast<std::uint64_t>(kN - 100));
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+
+  ASSERT_TRUE(sub.wait_count(kN, 25s)) << "got " << sub.messages().size();
+  std::this_thread::sleep_for(300ms);  // a duplicate would show up now
+  EXPECT_EQ(sequence_problem(payloads(sub.messages()), kN), "");
+  auto c = counters();
+  EXPECT_EQ(c.in_flight, 0u);
+  EXPECT_EQ(c.queue_depth, 0u);
+  EXPECT_EQ(c.dropped, 0u);
+  EXPECT_GE(c.reconnects, 1u);
+}
+
+// kill -9 of a publisher process while the broker is down loses nothing:
+// a new process on the same queue directory delivers all, in order.
+TEST_F(MqttPublisherTest, KillDash9WhileBrokerDownLosesNothing) {
+  start_broker(true);
+  Subscriber sub(broker_->uri(), "kill-sub", {"canopen/gwk/test/seq"}, {MQTTVERSION_3_1_1, false});
+  ASSERT_TRUE(sub.connect());
+  const std::string uri = broker_->uri();
+  broker_->stop();
+
+  const auto qdir = (queue_dir_.path() / "tool-q").string();
+  constexpr int kN = 2000;
+  auto run_tool = [&](int count, const char* extra) {
+    std::string cmd = std::string(MQTT_PUBLISH_TOOL) + " " + uri + " " + qdir + " gwk " + std::to_string(count) + " 0 " +
+                      extra + " 2>&1";
+    return ::popen(cmd.c_str(), "r");
+  };
+  // First run: queue everything, then SIGKILL.
+  {
+    const auto pidfile = (queue_dir_.path() / "pid").string();
+    std::string cmd = std::string("exec ") + MQTT_PUBLISH_TOOL + " " + uri + " " + qdir + " gwk " + std::to_string(kN) +
+                      " 0 hold";
+    pid_t pid = ::fork();
+    if (pid == 0) {
+      int fd = ::open(pidfile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      ::dup2(fd, 1);
+      ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    ASSERT_TRUE(eventually([&] {
+      std::ifstream f(pidfile);
+      std::string s;
+      return std::getline(f, s) && s == "queued";
+    }, 20s));
+    ::kill(pid, SIGKILL);
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFSIGNALED(status));
+  }
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+  ASSERT_TRUE(eventually([&] { return sub.connects() >= 2; }, 15s));
+  // Second run: drain what the first one queued.
+  FILE* p = run_tool(0, "");
+  ASSERT_NE(p, nullptr);
+  char line[256];
+  std::string out;
+  while (std::fgets(line, sizeof line, p) != nullptr) out += line;
+  EXPECT_EQ(::pclose(p), 0) << out;
+  EXPECT_NE(out.find("drained"), std::string::npos) << out;
+  ASSERT_TRUE(sub.wait_count(kN, 20s)) << "got " << sub.messages().size();
+  std::this_thread::sleep_for(300ms);
+  EXPECT_EQ(sequence_problem(payloads(sub.messages()), kN), "");
+}
+
+// The Will: when the publisher's process dies, the broker publishes the
+// offline status (retained).
+TEST_F(MqttPublisherTest, WillOfflineWhenPublisherIsKilled) {
+  start_broker();
+  Subscriber sub(broker_->uri(), "will-sub", {"canopen/gww/status"}, {});
+  ASSERT_TRUE(sub.connect());
+  const auto outfile = (queue_dir_.path() / "out").string();
+  std::string cmd = std::string("exec ") + MQTT_PUBLISH_TOOL + " " + broker_->uri() + " " +
+                    (queue_dir_.path() / "will-q").string() + " gww 1 0 hold";
+  pid_t pid = ::fork();
+  if (pid == 0) {
+    int fd = ::open(outfile.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(fd, 1);
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ASSERT_TRUE(sub.wait_count(1, 15s));
+  EXPECT_EQ(sub.messages().at(0)->get_payload_str(), R"({"state":"online"})");
+  ::kill(pid, SIGKILL);
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  ASSERT_TRUE(sub.wait_count(2, 15s));
+  EXPECT_EQ(sub.messages().at(1)->get_payload_str(), R"({"state":"offline"})");
+  // Retained: a new subscriber sees offline.
+  Subscriber late(broker_->uri(), "will-late", {"canopen/gww/status"}, {});
+  ASSERT_TRUE(late.connect());
+  ASSERT_TRUE(late.wait_count(1, 5s));
+  EXPECT_EQ(late.messages().at(0)->get_payload_str(), R"({"state":"offline"})");
+  EXPECT_TRUE(late.messages().at(0)->is_retained());
+}
+
+// A broker that refuses MQTT 5: the publisher falls back to 3.1.1, and
+// events and requests (replyTo in the body) still work.
+TEST_F(MqttPublisherTest, FallsBackTo311WhenBrokerRefuses5) {
+  start_broker();
+  V311OnlyProxy proxy(broker_->port());
+  Subscriber sub(broker_->uri(), "fallback-sub", {"canopen/gw1/#", "replies/fb"}, {});
+  ASSERT_TRUE(sub.connect());
+  auto c = config();
+  c.server_uri = "tcp://127.0.0.1:" + std::to_string(proxy.port());
+  start_publisher(c);
+  EXPECT_EQ(counters().mqtt_version, 4);
+  EXPECT_GE(proxy.refused_v5(), 1);
+  publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", "{}", false));
+  ASSERT_TRUE(sub.wait_topic("canopen/gw1/1/5/emcy", 10s));
+  sub.client()
+      .publish(::mqtt::make_message("canopen/gw1/1/5/nmt", R"({"command":"start","replyTo":"replies/fb","correlationId":3})",
+                                    1, false))
+      ->wait_for(5s);
+  ASSERT_TRUE(sub.wait_topic("replies/fb", 10s));
+  auto r = boost::json::parse(sub.on_topic("replies/fb").at(0)->get_payload_str()).as_object();
+  EXPECT_EQ(r.at("correlationId").as_int64(), 3);
+  io_.call([&] { pub_.reset(); });  // before the proxy goes
+}
