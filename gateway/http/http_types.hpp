@@ -1,0 +1,73 @@
+// The request and response shapes the HTTP server hands to route handlers.
+// No Beast here: handlers (REST layer) include only this header.
+//
+// Thread safety: a Request is read-only for the handler; a Responder may be
+// called from any thread (it hops onto the server's io_context), at most
+// once (later calls are ignored), and is a no-op once the connection is gone.
+#pragma once
+
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace gateway::http {
+
+struct Request {
+  std::string method;  // "GET", "PUT" ... as sent (upper case by convention)
+  std::string target;  // raw request-target, e.g. "/api/v1/x?type=u16"
+  std::string path;    // percent-decoded path, e.g. "/api/v1/x"
+  // Path parameters of the matched route pattern, decoded: {"net": "1"}.
+  std::map<std::string, std::string, std::less<>> params;
+  // Query parameters in order, decoded ('+' is a space); repeated keys kept.
+  std::vector<std::pair<std::string, std::string>> query;
+  // Header fields in order; names lower-cased.
+  std::vector<std::pair<std::string, std::string>> headers;
+  std::string body;
+  std::string peer;  // "127.0.0.1:50312" or "[::1]:50312"
+  bool tls = false;
+
+  // First value of a path parameter; "" when absent.
+  std::string_view param(std::string_view name) const;
+  // First value of a query parameter; nullopt when absent.
+  std::optional<std::string_view> query_param(std::string_view name) const;
+  // First value of a header (name case-insensitive); nullopt when absent.
+  std::optional<std::string_view> header(std::string_view name) const;
+};
+
+struct Response {
+  int status = 200;
+  std::string content_type = "application/json";
+  std::string body;
+  // Extra header fields (e.g. {"Allow", "GET, PUT"}, {"WWW-Authenticate", ...}).
+  std::vector<std::pair<std::string, std::string>> headers;
+
+  // RFC 9457 problem document: {"type":"about:blank","title":<reason>,
+  // "status":<status>,"detail":<detail>} as application/problem+json.
+  static Response problem(int status, std::string_view detail);
+  static Response json(std::string body, int status = 200);
+};
+
+// Reason phrase of a status code ("Not Found"); "Unknown" when not known.
+std::string_view reason_phrase(int status);
+
+// Completes one request. See the thread-safety note at the top.
+using Responder = std::function<void(Response)>;
+
+// A route handler. It runs on the io_context thread and MUST arrange for the
+// Responder to be called exactly once, now or later (e.g. after an SDO round
+// trip); it must not block. The Request stays valid until the Responder has
+// been called or destroyed, so a handler may keep a reference to it while
+// the Responder is pending. If it never answers, the server answers 500
+// after HttpConfig::handler_timeout.
+using Handler = std::function<void(const Request&, Responder)>;
+
+// Security hook, run before every route (including static files) and before
+// the WebSocket upgrade: nullopt = let the request through; a Response (e.g.
+// 401 problem+json) is sent instead of running the route.
+using Authorizer = std::function<std::optional<Response>(const Request&)>;
+
+}  // namespace gateway::http

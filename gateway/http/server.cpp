@@ -1,0 +1,850 @@
+// The only translation unit that instantiates Beast (HTTP, WebSocket, TLS):
+// Beast is slow to compile, so everything else talks to it through
+// http_server.hpp. Stream-independent logic lives in the non-template bases
+// (Connection, WsClient) so the two stream types (TCP, TLS) duplicate as
+// little code as possible.
+#include "http_server.hpp"
+
+#include <array>
+#include <atomic>
+#include <boost/asio/dispatch.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/asio/write.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
+#include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
+#include <boost/url/parse.hpp>
+#include <boost/url/url_view.hpp>
+#include <optional>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "event_stream.hpp"
+#include "log.hpp"
+#include "router.hpp"
+#include "static_files.hpp"
+
+namespace gateway::http {
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace bhttp = beast::http;
+namespace websocket = beast::websocket;
+using tcp = net::ip::tcp;
+using error_code = boost::system::error_code;
+using BeastRequest = bhttp::request<bhttp::string_body>;
+using BeastResponse = bhttp::response<bhttp::string_body>;
+using TlsStream = beast::ssl_stream<beast::tcp_stream>;
+
+namespace {
+
+constexpr std::string_view kEventsPath = "/api/v1/events";
+constexpr auto kCloseGrace = std::chrono::seconds(2);
+
+struct Counters {
+  std::atomic<std::uint64_t> accepted{0}, rejected{0}, active{0}, tls_failures{0};
+  std::atomic<std::uint64_t> ws_clients{0}, ws_total{0}, ws_sent{0}, ws_dropped{0}, ws_closed_slow{0};
+  std::array<std::atomic<std::uint64_t>, 600> by_status{};
+  void count_status(int status) {
+    if (status >= 100 && status < 600) by_status[static_cast<std::size_t>(status)].fetch_add(1, std::memory_order_relaxed);
+  }
+};
+
+// Something stop() can close.
+class Closable {
+ public:
+  virtual ~Closable() = default;
+  virtual void shutdown() = 0;
+};
+
+std::string endpoint_string(const tcp::endpoint& ep) {
+  const auto addr = ep.address();
+  std::string s = addr.is_v6() ? "[" + addr.to_string() + "]" : addr.to_string();
+  return s + ":" + std::to_string(ep.port());
+}
+
+bool iequals(std::string_view a, std::string_view b) { return beast::iequals(a, b); }
+
+}  // namespace
+
+class WsClient;
+
+struct HttpServer::Impl : std::enable_shared_from_this<HttpServer::Impl> {
+  Impl(net::io_context& io, HttpConfig c, Logger* l) : ioc(io), cfg(std::move(c)), log(l), acceptor(io), accept_timer(io) {}
+
+  net::io_context& ioc;
+  HttpConfig cfg;
+  Logger* log;
+  std::optional<net::ssl::context> tls;
+  tcp::acceptor acceptor;
+  net::steady_timer accept_timer;  // back-off after EMFILE and the like
+  Router router;
+  Authorizer authorizer;
+  Counters counters;
+  std::atomic<std::uint16_t> port{0};
+  bool started = false;
+  bool stopped = false;
+  std::uint64_t next_id = 1;
+  std::unordered_map<std::uint64_t, std::weak_ptr<Closable>> connections;
+  std::unordered_map<std::uint64_t, std::weak_ptr<WsClient>> ws_clients;
+  std::vector<std::shared_ptr<WsClient>> publish_scratch;
+
+  void debug(const std::string& m) {
+    if (log && log->enabled(LogLevel::Debug)) log->debug("http: " + m);
+  }
+  void do_accept();
+  void on_accept(error_code ec, tcp::socket socket);
+  void stop();
+};
+
+namespace {
+
+// ---------------------------------------------------------------------------
+// WebSocket client: queue, filter and policy (stream independent).
+
+}  // namespace
+
+class WsClient : public Closable, public std::enable_shared_from_this<WsClient> {
+ public:
+  WsClient(std::shared_ptr<HttpServer::Impl> impl, bool binary, std::string peer)
+      : impl_(std::move(impl)),
+        binary_(binary),
+        peer_(std::move(peer)),
+        queue_(SendQueue::Limits{impl_->cfg.ws_queue_max_messages, impl_->cfg.ws_queue_max_bytes,
+                                 impl_->cfg.ws_stall_timeout}),
+        id_(impl_->next_id++) {
+    impl_->counters.active.fetch_add(1, std::memory_order_relaxed);
+  }
+  ~WsClient() override {
+    impl_->connections.erase(id_);
+    impl_->ws_clients.erase(id_);
+    if (registered_) impl_->counters.ws_clients.fetch_sub(1, std::memory_order_relaxed);
+    impl_->counters.active.fetch_sub(1, std::memory_order_relaxed);
+  }
+
+  void deliver(const EncodedEventPtr& ev) {
+    if (!open_ || closing_ || !filter_.matches(*ev)) return;
+    push(SendQueue::Item{ev, {}, binary_});
+  }
+
+  void shutdown() override { begin_close(websocket::close_reason(websocket::close_code::going_away, "server stopping")); }
+
+ protected:
+  // Called once the handshake succeeded.
+  void opened() {
+    open_ = true;
+    registered_ = true;
+    impl_->connections.emplace(id_, weak_from_this());
+    impl_->ws_clients.emplace(id_, weak_from_this());
+    impl_->counters.ws_clients.fetch_add(1, std::memory_order_relaxed);
+    impl_->counters.ws_total.fetch_add(1, std::memory_order_relaxed);
+    impl_->counters.count_status(101);
+    impl_->debug("ws client " + peer_ + " connected" + (binary_ ? " (protobuf)" : ""));
+  }
+
+  void on_text_message(std::string_view text) {
+    std::string error;
+    std::string reply;
+    if (filter_.parse(text, error)) {
+      reply = "{\"subscribed\":" + filter_.to_json() + "}";
+    } else {
+      reply = "{\"error\":" + Response::problem(400, error).body + "}";
+    }
+    push(SendQueue::Item{nullptr, std::move(reply), false});
+  }
+  void on_binary_message() {
+    push(SendQueue::Item{
+        nullptr, "{\"error\":" + Response::problem(400, "filter messages are JSON text frames").body + "}", false});
+  }
+
+  void push(SendQueue::Item item) {
+    if (closing_) return;
+    const auto before = queue_.dropped();
+    const auto r = queue_.push(std::move(item), std::chrono::steady_clock::now());
+    impl_->counters.ws_dropped.fetch_add(queue_.dropped() - before, std::memory_order_relaxed);
+    if (r == SendQueue::Result::Close) {
+      impl_->counters.ws_closed_slow.fetch_add(1, std::memory_order_relaxed);
+      impl_->debug("ws client " + peer_ + " too slow, closing (dropped " + std::to_string(queue_.dropped()) + ")");
+      begin_close(websocket::close_reason(websocket::close_code::policy_error, "slow consumer"));
+      return;
+    }
+    maybe_write();
+  }
+
+  void maybe_write() {
+    if (writing_ || closing_ || queue_.empty()) return;
+    current_ = queue_.pop();
+    writing_ = true;
+    start_write(current_.payload(), current_.binary);
+  }
+
+  void on_write(error_code ec) {
+    writing_ = false;
+    current_ = {};
+    if (ec) {
+      closed();
+      return;
+    }
+    impl_->counters.ws_sent.fetch_add(1, std::memory_order_relaxed);
+    maybe_write();
+  }
+
+  void begin_close(websocket::close_reason reason) {
+    if (closing_) return;
+    closing_ = true;
+    queue_.clear();
+    if (!open_) {
+      force_close();
+      return;
+    }
+    start_close(reason);
+  }
+
+  // The connection is gone (read or write failed, or closed).
+  void closed() {
+    closing_ = true;
+    queue_.clear();
+    if (open_) {
+      open_ = false;
+      impl_->ws_clients.erase(id_);
+    }
+  }
+
+  virtual void start_write(std::string_view payload, bool binary) = 0;
+  // Sends a close frame, closing the socket if that takes too long.
+  virtual void start_close(websocket::close_reason reason) = 0;
+  virtual void force_close() = 0;
+
+  std::shared_ptr<HttpServer::Impl> impl_;
+  bool binary_;
+  std::string peer_;
+  SendQueue queue_;
+  EventFilter filter_;
+  SendQueue::Item current_;  // being written; kept alive for the write
+  bool open_ = false;
+  bool closing_ = false;
+  bool writing_ = false;
+  bool registered_ = false;
+  std::uint64_t id_;
+};
+
+namespace {
+
+template <class Stream>
+class WsSession final : public WsClient {
+ public:
+  WsSession(std::shared_ptr<HttpServer::Impl> impl, Stream&& stream, bool binary, std::string peer)
+      : WsClient(std::move(impl), binary, std::move(peer)), ws_(std::move(stream)), kill_timer_(impl_->ioc) {}
+
+  void run(BeastRequest req) {
+    const auto& cfg = impl_->cfg;
+    // The websocket stream's own timeouts replace tcp_stream's.
+    beast::get_lowest_layer(ws_).expires_never();
+    if (cfg.ws_socket_send_buffer > 0) {
+      error_code ignored;
+      beast::get_lowest_layer(ws_).socket().set_option(net::socket_base::send_buffer_size(cfg.ws_socket_send_buffer),
+                                                       ignored);
+    }
+    websocket::stream_base::timeout t{};
+    t.handshake_timeout = cfg.read_timeout;
+    // Beast pings after idle_timeout/2 without incoming data and gives up
+    // after idle_timeout.
+    t.idle_timeout = cfg.ws_ping_interval * 2;
+    t.keep_alive_pings = true;
+    ws_.set_option(t);
+    ws_.set_option(websocket::stream_base::decorator(
+        [](websocket::response_type& res) { res.set(bhttp::field::server, "canopen-gateway"); }));
+    ws_.read_message_max(cfg.ws_max_incoming_message);
+    auto self = std::static_pointer_cast<WsSession>(shared_from_this());
+    upgrade_req_ = std::move(req);  // must outlive the handshake
+    ws_.async_accept(upgrade_req_, [self](error_code ec) {
+      if (ec) {
+        self->impl_->debug("ws handshake with " + self->peer_ + " failed: " + ec.message());
+        self->closing_ = true;
+        return;
+      }
+      if (self->impl_->stopped) {
+        self->opened();
+        self->shutdown();
+        return;
+      }
+      self->opened();
+      self->do_read();
+    });
+  }
+
+ private:
+  void do_read() {
+    auto self = std::static_pointer_cast<WsSession>(shared_from_this());
+    ws_.async_read(rbuf_, [self](error_code ec, std::size_t) {
+      if (ec) {
+        self->closed();
+        self->kill_timer_.cancel();
+        return;
+      }
+      if (self->ws_.got_text()) {
+        const auto data = self->rbuf_.cdata();
+        self->on_text_message(std::string_view(static_cast<const char*>(data.data()), data.size()));
+      } else {
+        self->on_binary_message();
+      }
+      self->rbuf_.consume(self->rbuf_.size());
+      if (!self->closing_) self->do_read();
+    });
+  }
+
+  void start_write(std::string_view payload, bool binary) override {
+    ws_.binary(binary);
+    auto self = std::static_pointer_cast<WsSession>(shared_from_this());
+    ws_.async_write(net::buffer(payload.data(), payload.size()),
+                    [self](error_code ec, std::size_t) { self->on_write(ec); });
+  }
+
+  void start_close(websocket::close_reason reason) override {
+    auto self = std::static_pointer_cast<WsSession>(shared_from_this());
+    // A stalled client never lets the close frame out (it waits behind a
+    // blocked write): close the socket after a grace period.
+    kill_timer_.expires_after(kCloseGrace);
+    kill_timer_.async_wait([self](error_code ec) {
+      if (!ec) self->force_close();
+    });
+    ws_.async_close(reason, [self](error_code) { self->kill_timer_.cancel(); });
+  }
+
+  void force_close() override {
+    error_code ignored;
+    beast::get_lowest_layer(ws_).socket().close(ignored);
+  }
+
+  websocket::stream<Stream> ws_;
+  BeastRequest upgrade_req_;
+  beast::flat_buffer rbuf_;
+  net::steady_timer kill_timer_;
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// HTTP connection: request -> route -> response (stream independent).
+
+namespace {
+
+class Connection;
+
+// State shared between a pending request and its Responder.
+struct PendingReply {
+  std::weak_ptr<Connection> conn;
+  std::atomic<bool> done{false};
+};
+
+class Connection : public Closable, public std::enable_shared_from_this<Connection> {
+ public:
+  Connection(std::shared_ptr<HttpServer::Impl> impl, std::string peer, bool tls)
+      : impl_(std::move(impl)), peer_(std::move(peer)), tls_(tls), handler_timer_(impl_->ioc), id_(impl_->next_id++) {
+    impl_->connections.emplace(id_, std::weak_ptr<Closable>());
+  }
+  ~Connection() override {
+    impl_->connections.erase(id_);
+    impl_->counters.active.fetch_sub(1, std::memory_order_relaxed);
+  }
+
+  void registered() { impl_->connections[id_] = weak_from_this(); }
+
+  // Sends `r` for the current request; ignored when it is not `pending`.
+  void reply(const std::shared_ptr<PendingReply>& pending, Response r) {
+    if (pending != pending_) return;
+    pending_.reset();
+    handler_timer_.cancel();
+    send(std::move(r));
+  }
+
+ protected:
+  void handle(BeastRequest&& breq) {
+    keep_alive_ = breq.keep_alive();
+    head_ = breq.method() == bhttp::verb::head;
+    version_ = breq.version();
+
+    auto req = std::make_shared<Request>();
+    req->method = std::string(breq.method_string());
+    req->target = std::string(breq.target());
+    req->peer = peer_;
+    req->tls = tls_;
+    for (const auto& f : breq) {
+      std::string name(f.name_string());
+      for (auto& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      req->headers.emplace_back(std::move(name), std::string(f.value()));
+    }
+    auto parsed = boost::urls::parse_origin_form(req->target);
+    if (!parsed) {
+      keep_alive_ = false;
+      send(Response::problem(400, "malformed request target"));
+      return;
+    }
+    const boost::urls::url_view& url = *parsed;
+    req->path = std::string(url.path());
+    std::vector<std::string> segments;
+    for (auto s : url.segments()) segments.emplace_back(s);
+    // "/a/" is {"a", ""}: keep the empty segment, so it stays a different path.
+    for (auto p : url.params(boost::urls::encoding_opts(true, false, false)))
+      req->query.emplace_back(p.key, p.has_value ? p.value : std::string());
+
+    if (req->path == kEventsPath) {
+      if (!websocket::is_upgrade(breq)) {
+        Response r = Response::problem(426, "this path is a WebSocket endpoint");
+        r.headers.emplace_back("Upgrade", "websocket");
+        send(std::move(r));
+        return;
+      }
+      handle_upgrade(std::move(breq), *req);
+      return;
+    }
+    req->body = std::move(breq.body());
+
+    auto m = impl_->router.match(req->method, segments);
+    if (m.kind == Router::Match::Kind::Found) {
+      req->params = std::move(m.params);
+      if (auto denied = authorize(*req)) {
+        send(std::move(*denied));
+        return;
+      }
+      run_handler(*m.handler, std::move(req));
+      return;
+    }
+    const auto& cfg = impl_->cfg;
+    if (m.kind == Router::Match::Kind::NotFound && !cfg.static_dir.empty() && is_static_path(segments)) {
+      if (req->method != "GET" && req->method != "HEAD") {
+        Response r = Response::problem(405, "static files are read with GET");
+        r.headers.emplace_back("Allow", "GET, HEAD");
+        send(std::move(r));
+        return;
+      }
+      if (auto denied = authorize(*req)) {
+        send(std::move(*denied));
+        return;
+      }
+      Response r;
+      if (load_static_file(cfg.static_dir, segments, cfg.max_static_file_bytes, r.body, r.content_type) ==
+          StaticResult::Ok) {
+        r.headers.emplace_back("Cache-Control", "no-cache");
+        r.headers.emplace_back("X-Content-Type-Options", "nosniff");
+        send(std::move(r));
+      } else {
+        send(Response::problem(404, "no such file: " + req->path));
+      }
+      return;
+    }
+    if (m.kind == Router::Match::Kind::MethodNotAllowed) {
+      Response r = Response::problem(405, "method " + req->method + " is not allowed on " + req->path);
+      r.headers.emplace_back("Allow", m.allow);
+      send(std::move(r));
+      return;
+    }
+    send(Response::problem(404, "no such resource: " + req->path));
+  }
+
+  std::optional<Response> authorize(const Request& req) {
+    if (!impl_->authorizer) return std::nullopt;
+    try {
+      return impl_->authorizer(req);
+    } catch (const std::exception& e) {
+      impl_->debug(std::string("authorizer threw: ") + e.what());
+      return Response::problem(500, "authorization failed");
+    }
+  }
+
+  void run_handler(const Handler& handler, std::shared_ptr<Request> req) {
+    auto pending = std::make_shared<PendingReply>();
+    pending->conn = weak_from_this();
+    pending_ = pending;
+    net::io_context& ioc = impl_->ioc;
+    Responder responder = [pending, req, &ioc](Response r) {
+      if (pending->done.exchange(true)) return;
+      net::dispatch(ioc, [pending, r = std::move(r)]() mutable {
+        if (auto c = pending->conn.lock()) c->reply(pending, std::move(r));
+      });
+    };
+    auto self = shared_from_this();
+    handler_timer_.expires_after(impl_->cfg.handler_timeout);
+    handler_timer_.async_wait([self, pending](error_code ec) {
+      if (ec || pending->done.exchange(true)) return;
+      self->impl_->debug("handler for " + self->peer_ + " did not answer in time");
+      self->reply(pending, Response::problem(500, "the request handler did not answer in time"));
+    });
+    try {
+      handler(*req, std::move(responder));
+    } catch (const std::exception& e) {
+      impl_->debug(std::string("handler threw: ") + e.what());
+      if (!pending->done.exchange(true)) reply(pending, Response::problem(500, "internal error"));
+    }
+  }
+
+  bool origin_allowed(const BeastRequest& breq) const {
+    auto it = breq.find(bhttp::field::origin);
+    if (it == breq.end()) return true;  // not a browser
+    const std::string_view origin = it->value();
+    for (const auto& a : impl_->cfg.allowed_origins)
+      if (a == "*" || iequals(a, origin)) return true;
+    auto u = boost::urls::parse_uri(origin);
+    auto host = breq.find(bhttp::field::host);
+    if (!u || host == breq.end() || !u->has_authority()) return false;
+    return iequals(u->encoded_host_and_port(), host->value());
+  }
+
+  void handle_upgrade(BeastRequest&& breq, const Request& req) {
+    keep_alive_ = false;  // any answer but 101 ends the connection
+    if (!origin_allowed(breq)) {
+      send(Response::problem(403, "origin not allowed"));
+      return;
+    }
+    if (auto denied = authorize(req)) {
+      send(std::move(*denied));
+      return;
+    }
+    bool binary = false;
+    if (auto f = req.query_param("format")) {
+      if (*f == "protobuf") {
+        binary = true;
+      } else if (*f != "json") {
+        send(Response::problem(400, "format must be json or protobuf"));
+        return;
+      }
+    }
+    if (impl_->stopped) {
+      send(Response::problem(503, "server stopping"));
+      return;
+    }
+    upgrade(std::move(breq), binary);
+  }
+
+  // Builds the Beast response and hands it to the stream.
+  void send(Response r) {
+    impl_->counters.count_status(r.status);
+    BeastResponse res;
+    res.version(version_ == 10 ? 10 : 11);
+    res.result(static_cast<unsigned>(r.status));
+    res.set(bhttp::field::server, "canopen-gateway");
+    if (!r.body.empty() || r.status >= 200) res.set(bhttp::field::content_type, r.content_type);
+    for (auto& [k, v] : r.headers) res.set(k, v);
+    res.keep_alive(keep_alive_ && !impl_->stopped);
+    res.body() = std::move(r.body);
+    res.prepare_payload();
+    if (head_) res.body().clear();  // Content-Length stays that of the GET
+    write(std::move(res));
+  }
+
+  virtual void write(BeastResponse&& res) = 0;
+  virtual void upgrade(BeastRequest&& req, bool binary) = 0;
+
+  std::shared_ptr<HttpServer::Impl> impl_;
+  std::string peer_;
+  bool tls_;
+  bool keep_alive_ = true;
+  bool head_ = false;
+  unsigned version_ = 11;
+  std::shared_ptr<PendingReply> pending_;
+  net::steady_timer handler_timer_;
+  std::uint64_t id_;
+};
+
+template <class Stream>
+class HttpSession final : public Connection {
+ public:
+  HttpSession(std::shared_ptr<HttpServer::Impl> impl, Stream&& stream, std::string peer)
+      : Connection(std::move(impl), std::move(peer), std::is_same_v<Stream, TlsStream>), stream_(std::move(stream)) {}
+
+  void run() {
+    registered();
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    if constexpr (std::is_same_v<Stream, TlsStream>) {
+      beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+      stream_.async_handshake(net::ssl::stream_base::server, [self](error_code ec) {
+        if (ec) {
+          self->impl_->counters.tls_failures.fetch_add(1, std::memory_order_relaxed);
+          self->impl_->debug("TLS handshake with " + self->peer_ + " failed: " + ec.message());
+          self->close_now();
+          return;
+        }
+        self->read_request();
+      });
+    } else {
+      read_request();
+    }
+  }
+
+  void shutdown() override { close_now(); }
+
+ private:
+  void read_request() {
+    if (impl_->stopped) {
+      close_now();
+      return;
+    }
+    head_ = false;  // an error answer must not inherit the previous request's
+    version_ = 11;
+    parser_.emplace();
+    parser_->header_limit(static_cast<std::uint32_t>(impl_->cfg.max_header_bytes));
+    parser_->body_limit(impl_->cfg.max_body_bytes);
+    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.idle_timeout);
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    bhttp::async_read_header(stream_, buffer_, *parser_, [self](error_code ec, std::size_t) { self->on_header(ec); });
+  }
+
+  void on_header(error_code ec) {
+    if (ec) {
+      on_read_error(ec);
+      return;
+    }
+    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+    const auto& req = parser_->get();
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    if (!parser_->is_done() && iequals(req[bhttp::field::expect], "100-continue")) {
+      // curl and others wait for this before sending a larger body.
+      static constexpr std::string_view kContinue = "HTTP/1.1 100 Continue\r\n\r\n";
+      net::async_write(stream_, net::buffer(kContinue.data(), kContinue.size()),
+                       [self](error_code ec2, std::size_t) {
+                         if (ec2) return self->close_now();
+                         self->read_body();
+                       });
+      return;
+    }
+    read_body();
+  }
+
+  void read_body() {
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    if (parser_->is_done()) {
+      on_request();
+      return;
+    }
+    bhttp::async_read(stream_, buffer_, *parser_, [self](error_code ec, std::size_t) {
+      if (ec) return self->on_read_error(ec);
+      self->on_request();
+    });
+  }
+
+  void on_request() {
+    if (impl_->stopped) return close_now();
+    beast::get_lowest_layer(stream_).expires_never();  // the handler may take its time
+    handle(parser_->release());
+  }
+
+  void on_read_error(error_code ec) {
+    if (ec == bhttp::error::body_limit) {
+      keep_alive_ = false;
+      send(Response::problem(413, "request body larger than " + std::to_string(impl_->cfg.max_body_bytes) + " bytes"));
+    } else if (ec == bhttp::error::header_limit) {
+      keep_alive_ = false;
+      send(Response::problem(431, "request header too large"));
+    } else if (ec.category() == bhttp::make_error_code(bhttp::error::end_of_stream).category() &&
+               ec != bhttp::error::end_of_stream &&
+               ec != bhttp::error::partial_message) {
+      keep_alive_ = false;
+      send(Response::problem(400, "malformed request: " + ec.message()));
+    } else {
+      close_now();  // end of stream, timeout, reset
+    }
+  }
+
+  void write(BeastResponse&& res) override {
+    res_ = std::move(res);
+    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    bhttp::async_write(stream_, res_, [self](error_code ec, std::size_t) {
+      if (ec) return self->close_now();
+      if (!self->res_.keep_alive()) return self->graceful_close();
+      self->res_ = {};
+      self->read_request();
+    });
+  }
+
+  void upgrade(BeastRequest&& req, bool binary) override {
+    beast::get_lowest_layer(stream_).expires_never();
+    upgraded_ = true;
+    auto ws = std::make_shared<WsSession<Stream>>(impl_, std::move(stream_), binary, peer_);
+    ws->run(std::move(req));
+  }
+
+  // Half-closes so the client reads the whole response before the FIN (an
+  // abrupt close with unread input would send a reset and could destroy it).
+  void graceful_close() {
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    beast::get_lowest_layer(stream_).expires_after(kCloseGrace);
+    if constexpr (std::is_same_v<Stream, TlsStream>) {
+      stream_.async_shutdown([self](error_code) { self->close_now(); });
+    } else {
+      error_code ignored;
+      stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+      drain();
+    }
+  }
+
+  void drain() {
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    stream_.async_read_some(net::buffer(discard_), [self](error_code ec, std::size_t) {
+      if (ec) return self->close_now();
+      self->drain();
+    });
+  }
+
+  void close_now() {
+    if (upgraded_) return;  // the stream now belongs to the WebSocket session
+    error_code ignored;
+    beast::get_lowest_layer(stream_).socket().close(ignored);
+    handler_timer_.cancel();  // a pending handler's late answer is then a no-op
+  }
+
+  Stream stream_;
+  beast::flat_buffer buffer_;
+  std::optional<bhttp::request_parser<bhttp::string_body>> parser_;
+  BeastResponse res_;
+  std::array<char, 4096> discard_{};
+  bool upgraded_ = false;
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Server.
+
+void HttpServer::Impl::do_accept() {
+  auto self = shared_from_this();
+  acceptor.async_accept([self](error_code ec, tcp::socket socket) { self->on_accept(ec, std::move(socket)); });
+}
+
+void HttpServer::Impl::on_accept(error_code ec, tcp::socket socket) {
+  if (stopped || ec == net::error::operation_aborted) return;
+  if (ec) {
+    // Out of descriptors and the like: retry later instead of spinning.
+    if (log) log->warn("http: accept failed: " + ec.message());
+    auto self = shared_from_this();
+    accept_timer.expires_after(std::chrono::milliseconds(100));
+    accept_timer.async_wait([self](error_code e) {
+      if (!e && !self->stopped) self->do_accept();
+    });
+    return;
+  }
+  counters.accepted.fetch_add(1, std::memory_order_relaxed);
+  if (counters.active.load(std::memory_order_relaxed) >= cfg.max_connections) {
+    counters.rejected.fetch_add(1, std::memory_order_relaxed);
+    error_code ignored;
+    socket.close(ignored);
+  } else {
+    error_code pec;
+    const auto ep = socket.remote_endpoint(pec);
+    std::string peer = pec ? std::string("?") : endpoint_string(ep);
+    error_code ignored;
+    socket.set_option(tcp::no_delay(true), ignored);
+    counters.active.fetch_add(1, std::memory_order_relaxed);
+    if (tls) {
+      auto s = std::make_shared<HttpSession<TlsStream>>(shared_from_this(),
+                                                        TlsStream(beast::tcp_stream(std::move(socket)), *tls),
+                                                        std::move(peer));
+      s->run();
+    } else {
+      auto s = std::make_shared<HttpSession<beast::tcp_stream>>(shared_from_this(),
+                                                                beast::tcp_stream(std::move(socket)), std::move(peer));
+      s->run();
+    }
+  }
+  do_accept();
+}
+
+void HttpServer::Impl::stop() {
+  if (stopped) return;
+  stopped = true;
+  error_code ignored;
+  acceptor.close(ignored);
+  accept_timer.cancel();
+  std::vector<std::shared_ptr<Closable>> all;
+  for (auto& [id, w] : connections)
+    if (auto c = w.lock()) all.push_back(std::move(c));
+  for (auto& c : all) c->shutdown();
+}
+
+HttpServer::HttpServer(boost::asio::io_context& ioc, HttpConfig config, Logger* log)
+    : impl_(std::make_shared<Impl>(ioc, std::move(config), log)) {
+  const auto& cfg = impl_->cfg;
+  if (cfg.cert_file.empty() != cfg.key_file.empty())
+    throw std::runtime_error("TLS needs both a certificate file and a key file");
+  if (!cfg.cert_file.empty()) {
+    impl_->tls.emplace(net::ssl::context::tls_server);
+    auto& ctx = *impl_->tls;
+    ctx.set_options(net::ssl::context::default_workarounds | net::ssl::context::no_sslv2 |
+                    net::ssl::context::no_sslv3 | net::ssl::context::no_tlsv1 | net::ssl::context::no_tlsv1_1 |
+                    net::ssl::context::single_dh_use);
+    error_code ec;
+    ctx.use_certificate_chain_file(cfg.cert_file.string(), ec);
+    if (ec) throw std::runtime_error("TLS certificate " + cfg.cert_file.string() + ": " + ec.message());
+    ctx.use_private_key_file(cfg.key_file.string(), net::ssl::context::pem, ec);
+    if (ec) throw std::runtime_error("TLS key " + cfg.key_file.string() + ": " + ec.message());
+  }
+}
+
+HttpServer::~HttpServer() {
+  impl_->stop();
+  // Connections may outlive *this; release what the routes captured.
+  impl_->router = Router{};
+  impl_->authorizer = nullptr;
+}
+
+void HttpServer::add_route(std::string method, std::string_view pattern, Handler handler) {
+  if (pattern == kEventsPath) throw std::invalid_argument("route " + std::string(pattern) + " is the event stream's");
+  impl_->router.add(std::move(method), pattern, std::move(handler));
+}
+
+void HttpServer::set_authorizer(Authorizer authorizer) { impl_->authorizer = std::move(authorizer); }
+
+void HttpServer::start() {
+  auto& i = *impl_;
+  if (i.started) return;
+  const auto addr = net::ip::make_address(i.cfg.address);
+  const tcp::endpoint ep(addr, i.cfg.port);
+  i.acceptor.open(ep.protocol());
+  i.acceptor.set_option(tcp::acceptor::reuse_address(true));
+  i.acceptor.bind(ep);
+  i.acceptor.listen(net::socket_base::max_listen_connections);
+  i.port = i.acceptor.local_endpoint().port();
+  i.started = true;
+  i.debug("listening on " + endpoint_string(i.acceptor.local_endpoint()) + (i.tls ? " (TLS)" : ""));
+  i.do_accept();
+}
+
+void HttpServer::stop() { impl_->stop(); }
+
+std::uint16_t HttpServer::bound_port() const { return impl_->port.load(); }
+
+void HttpServer::publish(const EncodedEventPtr& event) {
+  auto& i = *impl_;
+  if (!event || i.ws_clients.empty()) return;
+  // Copy first: a delivery may end a client, which unregisters itself.
+  auto& clients = i.publish_scratch;
+  clients.clear();
+  for (auto& [id, w] : i.ws_clients)
+    if (auto c = w.lock()) clients.push_back(std::move(c));
+  for (auto& c : clients) c->deliver(event);
+  clients.clear();
+}
+
+HttpStats HttpServer::stats() const {
+  const auto& c = impl_->counters;
+  HttpStats s;
+  s.connections_accepted = c.accepted.load(std::memory_order_relaxed);
+  s.connections_rejected = c.rejected.load(std::memory_order_relaxed);
+  s.connections_active = c.active.load(std::memory_order_relaxed);
+  s.tls_handshake_failures = c.tls_failures.load(std::memory_order_relaxed);
+  s.ws_clients = c.ws_clients.load(std::memory_order_relaxed);
+  s.ws_clients_total = c.ws_total.load(std::memory_order_relaxed);
+  s.ws_messages_sent = c.ws_sent.load(std::memory_order_relaxed);
+  s.ws_messages_dropped = c.ws_dropped.load(std::memory_order_relaxed);
+  s.ws_clients_closed_slow = c.ws_closed_slow.load(std::memory_order_relaxed);
+  for (std::size_t st = 100; st < c.by_status.size(); ++st)
+    if (auto n = c.by_status[st].load(std::memory_order_relaxed)) s.responses_by_status[static_cast<int>(st)] = n;
+  return s;
+}
+
+}  // namespace gateway::http

@@ -1,0 +1,833 @@
+// HttpServer over real sockets on 127.0.0.1 (ephemeral port): the server
+// runs its io_context on a thread; the tests drive Beast clients with their
+// own io_context and a deadline on every operation, so nothing can hang.
+#include "http_server.hpp"
+
+#include <gtest/gtest.h>
+#include <openssl/evp.h>
+#include <openssl/pem.h>
+#include <openssl/x509.h>
+
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/ssl.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <boost/beast/core.hpp>
+#include <boost/beast/http.hpp>
+#include <boost/beast/ssl.hpp>
+#include <boost/beast/websocket.hpp>
+#include <boost/beast/websocket/ssl.hpp>
+#include <boost/json/parse.hpp>
+#include <boost/json/serialize.hpp>
+#include <boost/json/value.hpp>
+#include <boost/json/value_to.hpp>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <future>
+#include <optional>
+#include <random>
+#include <thread>
+
+namespace net = boost::asio;
+namespace beast = boost::beast;
+namespace bhttp = beast::http;
+namespace websocket = beast::websocket;
+namespace fs = std::filesystem;
+using tcp = net::ip::tcp;
+using error_code = boost::system::error_code;
+using namespace std::chrono_literals;
+using gateway::EncodedEvent;
+using gateway::EncodedEventPtr;
+using gateway::EventKind;
+using gateway::http::HttpConfig;
+using gateway::http::HttpServer;
+using gateway::http::Request;
+using gateway::http::Responder;
+using gateway::http::Response;
+
+namespace {
+
+// --- server side ------------------------------------------------------------
+
+class TestServer {
+ public:
+  explicit TestServer(HttpConfig cfg, const std::function<void(HttpServer&)>& setup = {}) {
+    cfg.address = "127.0.0.1";
+    cfg.port = 0;
+    server_ = std::make_unique<HttpServer>(ioc_, std::move(cfg));
+    if (setup) setup(*server_);
+    server_->start();
+    thread_ = std::thread([this] { ioc_.run(); });
+  }
+  ~TestServer() {
+    on_io([this] { server_->stop(); });
+    guard_.reset();
+    ioc_.stop();
+    thread_.join();
+    server_.reset();
+  }
+
+  std::uint16_t port() const { return server_->bound_port(); }
+  HttpServer& server() { return *server_; }
+  net::io_context& ioc() { return ioc_; }
+
+  // Runs f on the server's thread and waits for it.
+  void on_io(std::function<void()> f) {
+    std::promise<void> done;
+    net::post(ioc_, [&] {
+      f();
+      done.set_value();
+    });
+    ASSERT_EQ(done.get_future().wait_for(5s), std::future_status::ready);
+  }
+
+  void publish(EncodedEventPtr ev) {
+    on_io([&] { server_->publish(ev); });
+  }
+
+  // Polls `pred` (on this thread; stats() is thread-safe) until true or 5 s.
+  bool wait_until(const std::function<bool()>& pred, std::chrono::milliseconds limit = 5s) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (!pred()) {
+      if (std::chrono::steady_clock::now() > end) return false;
+      std::this_thread::sleep_for(5ms);
+    }
+    return true;
+  }
+
+ private:
+  net::io_context ioc_;
+  net::executor_work_guard<net::io_context::executor_type> guard_{ioc_.get_executor()};
+  std::unique_ptr<HttpServer> server_;
+  std::thread thread_;
+};
+
+EncodedEventPtr make_event(EventKind kind, std::uint32_t net, std::uint8_t node, std::uint64_t seq,
+                           std::size_t pad = 0) {
+  auto e = std::make_shared<EncodedEvent>();
+  e->kind = kind;
+  e->network = net;
+  e->node = node;
+  e->seq = seq;
+  boost::json::object o;
+  o["kind"] = to_string(kind);
+  o["network"] = net;
+  o["node"] = node;
+  o["seq"] = seq;
+  if (pad) o["pad"] = std::string(pad, 'x');
+  e->json = boost::json::serialize(o);
+  e->binary = std::string("\x08") + static_cast<char>(seq & 0x7f) + std::string(3, '\0');
+  return e;
+}
+
+// --- client side ------------------------------------------------------------
+
+// Runs client operations with a deadline: start(handler) starts one async
+// operation; on timeout `cancel` is called and the operation awaited.
+class Driver {
+ public:
+  net::io_context ioc;
+
+  template <class Start>
+  error_code run(Start&& start, const std::function<void()>& cancel, std::chrono::milliseconds limit = 5s) {
+    std::optional<error_code> result;
+    start([&result](error_code ec, auto&&...) { result = ec; });
+    ioc.restart();
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (!result && std::chrono::steady_clock::now() < end) ioc.run_one_until(end);
+    if (!result) {
+      cancel();
+      ioc.restart();
+      while (!result) ioc.run_one();
+      return net::error::timed_out;
+    }
+    return *result;
+  }
+};
+
+class HttpClient : public Driver {
+ public:
+  explicit HttpClient(std::uint16_t port) : stream(ioc) {
+    ec = run([&](auto h) { stream.socket().async_connect({net::ip::make_address("127.0.0.1"), port}, h); }, cancel());
+  }
+
+  bhttp::response<bhttp::string_body> request(bhttp::verb verb, std::string target, std::string body = {},
+                                              std::vector<std::pair<std::string, std::string>> fields = {}) {
+    bhttp::request<bhttp::string_body> req{verb, target, 11};
+    req.set(bhttp::field::host, "127.0.0.1");
+    for (auto& [k, v] : fields) req.set(k, v);
+    if (!body.empty() || verb == bhttp::verb::put || verb == bhttp::verb::post) {
+      req.body() = std::move(body);
+      req.prepare_payload();
+    }
+    bhttp::response<bhttp::string_body> res;
+    ec = run([&](auto h) { bhttp::async_write(stream, req, h); }, cancel());
+    if (ec) return res;
+    bhttp::response_parser<bhttp::string_body> parser;
+    parser.body_limit(64u << 20);
+    if (verb == bhttp::verb::head) parser.skip(true);
+    ec = run([&](auto h) { bhttp::async_read(stream, buffer, parser, h); }, cancel());
+    if (!ec) res = parser.release();
+    return res;
+  }
+
+  bhttp::response<bhttp::string_body> get(std::string target) { return request(bhttp::verb::get, std::move(target)); }
+
+  // Writes raw bytes, then reads whatever comes until EOF (bounded).
+  std::string raw(const std::string& bytes, std::chrono::milliseconds limit = 3s) {
+    ec = run([&](auto h) { net::async_write(stream, net::buffer(bytes), h); }, cancel());
+    if (ec) return {};
+    std::string out;
+    std::array<char, 4096> buf{};
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (std::chrono::steady_clock::now() < end) {
+      std::size_t n = 0;
+      ec = run([&](auto h) {
+            stream.async_read_some(net::buffer(buf), [&n, h](error_code e, std::size_t k) mutable {
+              n = k;
+              h(e);
+            });
+          },
+          cancel(), std::chrono::duration_cast<std::chrono::milliseconds>(end - std::chrono::steady_clock::now()));
+      out.append(buf.data(), n);
+      if (ec) break;
+    }
+    return out;
+  }
+
+  std::function<void()> cancel() {
+    return [this] { stream.socket().close(); };
+  }
+
+  beast::tcp_stream stream;
+  beast::flat_buffer buffer;
+  error_code ec;
+};
+
+class WsClient : public Driver {
+ public:
+  explicit WsClient(std::uint16_t port, std::string target = "/api/v1/events",
+                    std::optional<std::string> origin = std::nullopt, int rcvbuf = 0)
+      : ws(ioc) {
+    auto& sock = beast::get_lowest_layer(ws).socket();
+    if (rcvbuf > 0) {
+      sock.open(tcp::v4());
+      sock.set_option(net::socket_base::receive_buffer_size(rcvbuf));
+    }
+    ec = run([&](auto h) { sock.async_connect({net::ip::make_address("127.0.0.1"), port}, h); }, cancel());
+    if (ec) return;
+    ws.set_option(websocket::stream_base::decorator([origin](websocket::request_type& req) {
+      if (origin) req.set(bhttp::field::origin, *origin);
+    }));
+    ws.control_callback([this](websocket::frame_type t, beast::string_view) {
+      if (t == websocket::frame_type::ping) ++pings;
+    });
+    ec = run([&](auto h) { ws.async_handshake(response, "127.0.0.1:" + std::to_string(port), target, h); },
+             cancel());
+  }
+
+  // Reads one message; its text in `out`.
+  error_code read(std::string& out, std::chrono::milliseconds limit = 5s) {
+    beast::flat_buffer b;
+    ec = run([&](auto h) { ws.async_read(b, h); }, cancel(), limit);
+    out = beast::buffers_to_string(b.data());
+    return ec;
+  }
+
+  error_code send(const std::string& text) {
+    ws.text(true);
+    return ec = run([&](auto h) { ws.async_write(net::buffer(text), h); }, cancel());
+  }
+
+  std::function<void()> cancel() {
+    return [this] { beast::get_lowest_layer(ws).socket().close(); };
+  }
+
+  websocket::stream<beast::tcp_stream> ws;
+  websocket::response_type response;
+  error_code ec;
+  int pings = 0;
+};
+
+boost::json::value parse_json(const std::string& s) {
+  error_code ec;
+  auto v = boost::json::parse(s, ec);
+  EXPECT_FALSE(ec) << s;
+  return v;
+}
+
+// Handler that answers with the request's params, query and some headers.
+void echo(const Request& req, Responder done) {
+  boost::json::object o;
+  boost::json::object params;
+  for (auto& [k, v] : req.params) params[k] = v;
+  boost::json::array query;
+  for (auto& [k, v] : req.query) query.push_back(boost::json::array{boost::json::string(k), boost::json::string(v)});
+  o["method"] = req.method;
+  o["path"] = req.path;
+  o["params"] = std::move(params);
+  o["query"] = std::move(query);
+  o["body"] = req.body;
+  o["accept"] = std::string(req.header("Accept").value_or(""));
+  o["peer_local"] = req.peer.rfind("127.0.0.1:", 0) == 0;
+  done(Response::json(boost::json::serialize(o)));
+}
+
+HttpConfig quick_config() {
+  HttpConfig c;
+  c.read_timeout = 3s;
+  c.idle_timeout = 5s;
+  return c;
+}
+
+}  // namespace
+
+// --- HTTP -----------------------------------------------------------------
+
+TEST(HttpServer, RoutesWithPathParamsAndQuery) {
+  TestServer ts(quick_config(), [](HttpServer& s) {
+    s.add_route("GET", "/api/v1/networks/{net}/nodes/{node}/sdo/{index}/{sub}", echo);
+    s.add_route("PUT", "/api/v1/networks/{net}/nodes/{node}/sdo/{index}/{sub}", echo);
+  });
+  HttpClient c(ts.port());
+  ASSERT_FALSE(c.ec) << c.ec.message();
+  auto res = c.request(bhttp::verb::get, "/api/v1/networks/1/nodes/5/sdo/1017/0?type=u16&x=a+b%21&flag", {},
+                       {{"Accept", "application/json"}});
+  ASSERT_FALSE(c.ec) << c.ec.message();
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res[bhttp::field::content_type], "application/json");
+  auto v = parse_json(res.body());
+  EXPECT_EQ(v.at("params").at("net"), "1");
+  EXPECT_EQ(v.at("params").at("node"), "5");
+  EXPECT_EQ(v.at("params").at("index"), "1017");
+  EXPECT_EQ(v.at("params").at("sub"), "0");
+  EXPECT_EQ(boost::json::serialize(v.at("query")), R"([["type","u16"],["x","a b!"],["flag",""]])");
+  EXPECT_EQ(v.at("accept"), "application/json");
+  EXPECT_EQ(v.at("peer_local"), true);
+
+  res = c.request(bhttp::verb::put, "/api/v1/networks/2/nodes/%31%30/sdo/0x6040/0", R"({"value":6})",
+                  {{"Content-Type", "application/json"}});
+  EXPECT_EQ(res.result_int(), 200u);
+  v = parse_json(res.body());
+  EXPECT_EQ(v.at("method"), "PUT");
+  EXPECT_EQ(v.at("params").at("node"), "10");  // percent-decoded
+  EXPECT_EQ(v.at("body"), R"({"value":6})");
+}
+
+TEST(HttpServer, UnknownPathIs404AndWrongMethodIs405) {
+  TestServer ts(quick_config(), [](HttpServer& s) { s.add_route("GET", "/api/v1/gateway", echo); });
+  HttpClient c(ts.port());
+  auto res = c.get("/api/v1/nope");
+  EXPECT_EQ(res.result_int(), 404u);
+  EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json");
+  auto v = parse_json(res.body());
+  EXPECT_EQ(v.at("status"), 404);
+  EXPECT_EQ(v.at("title"), "Not Found");
+  EXPECT_TRUE(v.at("detail").is_string());
+
+  res = c.request(bhttp::verb::delete_, "/api/v1/gateway");
+  EXPECT_EQ(res.result_int(), 405u);
+  EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json");
+  EXPECT_EQ(res[bhttp::field::allow], "GET, HEAD");
+  EXPECT_EQ(parse_json(res.body()).at("status"), 405);
+
+  // HEAD runs the GET route without a body.
+  res = c.request(bhttp::verb::head, "/api/v1/gateway");
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_TRUE(res.body().empty());
+  EXPECT_NE(res[bhttp::field::content_length], "0");
+
+  auto st = ts.server().stats();
+  EXPECT_EQ(st.responses_by_status[404], 1u);
+  EXPECT_EQ(st.responses_by_status[405], 1u);
+  EXPECT_EQ(st.responses_by_status[200], 1u);
+}
+
+TEST(HttpServer, BodyOverLimitIs413) {
+  HttpConfig cfg = quick_config();
+  cfg.max_body_bytes = 1024;
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("POST", "/x", echo); });
+  {
+    HttpClient c(ts.port());
+    auto res = c.request(bhttp::verb::post, "/x", std::string(1024, 'a'));
+    EXPECT_EQ(res.result_int(), 200u);
+    res = c.request(bhttp::verb::post, "/x", std::string(1025, 'a'));
+    EXPECT_EQ(res.result_int(), 413u);
+    EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json");
+    EXPECT_FALSE(res.keep_alive());
+  }
+  {
+    // Announced length alone is enough; the body is never read.
+    HttpClient c(ts.port());
+    auto out = c.raw("POST /x HTTP/1.1\r\nHost: a\r\nContent-Length: 100000000\r\n\r\n");
+    EXPECT_EQ(out.rfind("HTTP/1.1 413 ", 0), 0u) << out;
+  }
+  {
+    HttpClient c(ts.port());
+    auto out = c.raw("POST /x HTTP/1.1\r\nHost: a\r\nTransfer-Encoding: chunked\r\n\r\n800\r\n" +
+                     std::string(0x800, 'b') + "\r\n0\r\n\r\n");
+    EXPECT_EQ(out.rfind("HTTP/1.1 413 ", 0), 0u) << out;
+  }
+}
+
+TEST(HttpServer, HeaderOverLimitIs431AndGarbageIs400) {
+  HttpConfig cfg = quick_config();
+  cfg.max_header_bytes = 1024;
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); });
+  {
+    HttpClient c(ts.port());
+    auto out = c.raw("GET /x HTTP/1.1\r\nHost: a\r\nX-Big: " + std::string(2000, 'h') + "\r\n\r\n");
+    EXPECT_EQ(out.rfind("HTTP/1.1 431 ", 0), 0u) << out;
+  }
+  {
+    HttpClient c(ts.port());
+    auto out = c.raw("GET /x HTTP/1.1\r\nHost a\r\n\r\n");
+    EXPECT_EQ(out.rfind("HTTP/1.1 400 ", 0), 0u) << out;
+  }
+}
+
+TEST(HttpServer, KeepAliveServesSeveralRequestsOnOneConnection) {
+  TestServer ts(quick_config(), [](HttpServer& s) { s.add_route("GET", "/n/{i}", echo); });
+  HttpClient c(ts.port());
+  for (int i = 0; i < 20; ++i) {
+    auto res = c.get("/n/" + std::to_string(i));
+    ASSERT_FALSE(c.ec) << i << " " << c.ec.message();
+    ASSERT_EQ(res.result_int(), 200u);
+    EXPECT_TRUE(res.keep_alive());
+    EXPECT_EQ(boost::json::value_to<std::string>(parse_json(res.body()).at("params").at("i")), std::to_string(i));
+  }
+  EXPECT_EQ(ts.server().stats().connections_accepted, 1u);
+}
+
+TEST(HttpServer, IdleKeepAliveConnectionIsClosed) {
+  HttpConfig cfg = quick_config();
+  cfg.idle_timeout = 300ms;
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); });
+  HttpClient c(ts.port());
+  EXPECT_EQ(c.get("/x").result_int(), 200u);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().connections_active == 0; }));
+  EXPECT_GE(std::chrono::steady_clock::now() - t0, 200ms);
+}
+
+TEST(HttpServer, AsyncHandlerAnswersLaterWithoutBlockingTheLoop) {
+  std::vector<Responder> parked;
+  TestServer* tsp = nullptr;
+  TestServer ts(quick_config(), [&](HttpServer& s) {
+    s.add_route("GET", "/slow/{ms}", [&](const Request& req, Responder done) {
+      // Answer from a timer on the loop, as an SDO round trip would.
+      auto t = std::make_shared<net::steady_timer>(tsp->ioc(), std::chrono::milliseconds(std::stoi(std::string(req.param("ms")))));
+      t->async_wait([t, &req, done](error_code) { done(Response::json("{\"late\":\"" + std::string(req.param("ms")) + "\"}")); });
+    });
+    s.add_route("GET", "/fast", echo);
+    s.add_route("GET", "/never", [&](const Request&, Responder done) { parked.push_back(std::move(done)); });
+  });
+  tsp = &ts;
+  HttpClient slow(ts.port());
+  std::future<bhttp::response<bhttp::string_body>> slow_res =
+      std::async(std::launch::async, [&] { return slow.get("/slow/300"); });
+  // Meanwhile another connection is served at once.
+  HttpClient fast(ts.port());
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(fast.get("/fast").result_int(), 200u);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 250ms);
+  auto r = slow_res.get();
+  EXPECT_EQ(r.result_int(), 200u);
+  EXPECT_EQ(r.body(), R"({"late":"300"})");
+
+  // A Responder called after its connection is gone is a harmless no-op,
+  // from any thread. (While a handler is pending the server does not read,
+  // so the connection ends here through stop().)
+  HttpClient gone(ts.port());
+  bhttp::request<bhttp::string_body> req{bhttp::verb::get, "/never", 11};
+  gone.ec = gone.run([&](auto h) { bhttp::async_write(gone.stream, req, h); }, gone.cancel());
+  ASSERT_FALSE(gone.ec);
+  ASSERT_TRUE(ts.wait_until([&] {
+    bool has = false;
+    ts.on_io([&] { has = !parked.empty(); });
+    return has;
+  }));
+  ts.on_io([&] { ts.server().stop(); });
+  ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().connections_active == 0; }));
+  Responder late;
+  ts.on_io([&] { late = parked.front(); });
+  late(Response::json("{}"));
+  late(Response::json("{}"));  // twice: ignored
+  ts.on_io([] {});
+  EXPECT_EQ(ts.server().stats().responses_by_status.count(500), 0u);
+}
+
+TEST(HttpServer, HandlerThatNeverAnswersGets500AfterTimeout) {
+  HttpConfig cfg = quick_config();
+  cfg.handler_timeout = 200ms;
+  std::vector<Responder> parked;
+  TestServer ts(cfg, [&](HttpServer& s) {
+    s.add_route("GET", "/never", [&](const Request&, Responder done) { parked.push_back(std::move(done)); });
+  });
+  HttpClient c(ts.port());
+  auto res = c.get("/never");
+  EXPECT_EQ(res.result_int(), 500u);
+  EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json");
+  // The connection still works.
+  EXPECT_EQ(c.get("/nothing").result_int(), 404u);
+}
+
+TEST(HttpServer, AuthorizerRunsBeforeRoutes) {
+  int handled = 0;
+  TestServer ts(quick_config(), [&](HttpServer& s) {
+    s.add_route("GET", "/secret", [&](const Request& r, Responder done) {
+      ++handled;
+      echo(r, std::move(done));
+    });
+    s.set_authorizer([](const Request& r) -> std::optional<Response> {
+      if (r.header("authorization") == std::optional<std::string_view>("Bearer ok")) return std::nullopt;
+      auto res = Response::problem(401, "missing credentials");
+      res.headers.emplace_back("WWW-Authenticate", "Bearer");
+      return res;
+    });
+  });
+  HttpClient c(ts.port());
+  auto res = c.get("/secret");
+  EXPECT_EQ(res.result_int(), 401u);
+  EXPECT_EQ(res[bhttp::field::www_authenticate], "Bearer");
+  res = c.request(bhttp::verb::get, "/secret", {}, {{"Authorization", "Bearer ok"}});
+  EXPECT_EQ(res.result_int(), 200u);
+  ts.on_io([] {});
+  EXPECT_EQ(handled, 1);
+  // WebSocket upgrade goes through it too.
+  WsClient ws(ts.port());
+  EXPECT_EQ(ws.response.result_int(), 401u);
+}
+
+TEST(HttpServer, MaxConnections) {
+  HttpConfig cfg = quick_config();
+  cfg.max_connections = 2;
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); });
+  HttpClient a(ts.port()), b(ts.port());
+  EXPECT_EQ(a.get("/x").result_int(), 200u);
+  EXPECT_EQ(b.get("/x").result_int(), 200u);
+  HttpClient c(ts.port());
+  c.get("/x");
+  EXPECT_TRUE(c.ec);  // closed at once
+  EXPECT_EQ(ts.server().stats().connections_rejected, 1u);
+}
+
+class StaticFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    base_ = fs::temp_directory_path() / ("http_static_" + std::to_string(std::random_device{}()));
+    fs::create_directories(base_ / "web" / "css");
+    std::ofstream(base_ / "web" / "index.html") << "<!doctype html><title>gw</title>";
+    std::ofstream(base_ / "web" / "app.js") << "console.log(1);";
+    std::ofstream(base_ / "web" / "css" / "site.css") << "body{}";
+    std::ofstream(base_ / "web" / ".hidden") << "h";
+    std::ofstream(base_ / "secret.txt") << "SECRET";
+    fs::create_symlink(base_ / "secret.txt", base_ / "web" / "link.txt");
+  }
+  void TearDown() override { fs::remove_all(base_); }
+  fs::path base_;
+};
+
+TEST_F(StaticFiles, ServesDashboardWithContentTypesAndRefusesTraversal) {
+  HttpConfig cfg = quick_config();
+  cfg.static_dir = base_ / "web";
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/api/v1/gateway", echo); });
+  HttpClient c(ts.port());
+  auto res = c.get("/");
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res[bhttp::field::content_type], "text/html; charset=utf-8");
+  EXPECT_EQ(res.body(), "<!doctype html><title>gw</title>");
+  res = c.get("/static/app.js");
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res[bhttp::field::content_type], "text/javascript; charset=utf-8");
+  res = c.get("/static/css/site.css");
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res[bhttp::field::content_type], "text/css; charset=utf-8");
+  res = c.request(bhttp::verb::head, "/static/app.js");
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res[bhttp::field::content_length], "15");
+  EXPECT_EQ(c.get("/api/v1/gateway").result_int(), 200u);
+
+  for (const char* bad : {"/static/../secret.txt", "/static/%2e%2e/secret.txt", "/static/css/..%2F..%2Fsecret.txt",
+                          "/static/css%2F..%2F..%2Fsecret.txt", "/static/.hidden", "/static/link.txt",
+                          "/static/css", "/static/nope.js", "/static//etc/passwd", "/static/%00"}) {
+    HttpClient b(ts.port());
+    auto r = b.get(bad);
+    EXPECT_EQ(r.result_int(), 404u) << bad;
+    EXPECT_EQ(r.body().find("SECRET"), std::string::npos) << bad;
+  }
+  res = c.request(bhttp::verb::post, "/");
+  EXPECT_EQ(res.result_int(), 405u);
+  EXPECT_EQ(res[bhttp::field::allow], "GET, HEAD");
+}
+
+// --- WebSocket ------------------------------------------------------------
+
+TEST(WebSocket, ReceivesPublishedEventsAsJsonText) {
+  TestServer ts(quick_config());
+  WsClient ws(ts.port());
+  ASSERT_FALSE(ws.ec) << ws.ec.message();
+  ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 1; }));
+  for (std::uint64_t i = 1; i <= 3; ++i) ts.publish(make_event(EventKind::Tpdo, 1, 5, i));
+  for (std::uint64_t i = 1; i <= 3; ++i) {
+    std::string msg;
+    ASSERT_FALSE(ws.read(msg)) << ws.ec.message();
+    EXPECT_TRUE(ws.ws.got_text());
+    EXPECT_EQ(parse_json(msg).at("seq"), i);
+  }
+  // Plain GET on the event path: 426.
+  HttpClient c(ts.port());
+  auto res = c.get("/api/v1/events");
+  EXPECT_EQ(res.result_int(), 426u);
+}
+
+TEST(WebSocket, FilterSelectsNetworkNodeAndKind) {
+  TestServer ts(quick_config());
+  WsClient ws(ts.port());
+  ASSERT_FALSE(ws.ec);
+  ASSERT_FALSE(ws.send(R"({"networks":[1],"nodes":[5,10],"kinds":["tpdo","emcy"]})"));
+  std::string ack;
+  ASSERT_FALSE(ws.read(ack));
+  EXPECT_EQ(ack, R"({"subscribed":{"networks":[1],"nodes":[5,10],"kinds":["emcy","tpdo"]}})");
+
+  ts.publish(make_event(EventKind::Tpdo, 1, 5, 1));       // yes
+  ts.publish(make_event(EventKind::Tpdo, 2, 5, 2));       // other network
+  ts.publish(make_event(EventKind::Tpdo, 1, 6, 3));       // other node
+  ts.publish(make_event(EventKind::Heartbeat, 1, 5, 4));  // other kind
+  ts.publish(make_event(EventKind::Bus, 1, 0, 5));        // node 0 not listed
+  ts.publish(make_event(EventKind::Emcy, 1, 10, 6));      // yes
+  std::string msg;
+  ASSERT_FALSE(ws.read(msg));
+  EXPECT_EQ(parse_json(msg).at("seq"), 1);
+  ASSERT_FALSE(ws.read(msg));
+  EXPECT_EQ(parse_json(msg).at("seq"), 6);
+
+  // A bad filter is answered with an error and leaves the old one in place.
+  ASSERT_FALSE(ws.send(R"({"kinds":["bogus"]})"));
+  ASSERT_FALSE(ws.read(msg));
+  auto err = parse_json(msg);
+  EXPECT_EQ(err.at("error").at("status"), 400);
+  ts.publish(make_event(EventKind::Heartbeat, 1, 5, 7));
+  ts.publish(make_event(EventKind::Tpdo, 1, 10, 8));
+  ASSERT_FALSE(ws.read(msg));
+  EXPECT_EQ(parse_json(msg).at("seq"), 8);
+}
+
+TEST(WebSocket, ProtobufModeSendsBinaryFrames) {
+  TestServer ts(quick_config());
+  WsClient ws(ts.port(), "/api/v1/events?format=protobuf");
+  ASSERT_FALSE(ws.ec);
+  ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 1; }));
+  auto ev = make_event(EventKind::Emcy, 1, 5, 42);
+  ts.publish(ev);
+  std::string msg;
+  ASSERT_FALSE(ws.read(msg));
+  EXPECT_FALSE(ws.ws.got_text());
+  EXPECT_EQ(msg, ev->binary);
+  // Unknown format: 400.
+  WsClient bad(ts.port(), "/api/v1/events?format=xml");
+  EXPECT_EQ(bad.response.result_int(), 400u);
+}
+
+TEST(WebSocket, OriginCheck) {
+  HttpConfig cfg = quick_config();
+  cfg.allowed_origins = {"https://dash.example"};
+  TestServer ts(cfg);
+  WsClient evil(ts.port(), "/api/v1/events", "https://evil.example");
+  EXPECT_TRUE(evil.ec);
+  EXPECT_EQ(evil.response.result_int(), 403u);
+  WsClient listed(ts.port(), "/api/v1/events", "https://dash.example");
+  EXPECT_FALSE(listed.ec) << listed.ec.message();
+  // Same origin as the Host header (the dashboard served by this server).
+  WsClient same(ts.port(), "/api/v1/events", "http://127.0.0.1:" + std::to_string(ts.port()));
+  EXPECT_FALSE(same.ec) << same.ec.message();
+  WsClient none(ts.port());  // not a browser
+  EXPECT_FALSE(none.ec);
+  EXPECT_EQ(ts.server().stats().responses_by_status[403], 1u);
+}
+
+TEST(WebSocket, StalledClientDoesNotHoldUpOthers) {
+  HttpConfig cfg = quick_config();
+  // Slack for the fast reader: 1024 messages = 0.5 s behind (a loaded CI
+  // machine); the stalled one fills its queue and buffers in ~0.6 s.
+  cfg.ws_queue_max_messages = 1024;
+  cfg.ws_stall_timeout = 300ms;
+  cfg.ws_socket_send_buffer = 16 * 1024;
+  TestServer ts(cfg);
+  // Connects, then never reads, with a tiny receive buffer.
+  WsClient stalled(ts.port(), "/api/v1/events", std::nullopt, 4096);
+  ASSERT_FALSE(stalled.ec);
+  WsClient fast(ts.port());
+  ASSERT_FALSE(fast.ec);
+  ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 2; }));
+
+  constexpr std::uint64_t kTotal = 3000;
+  std::vector<std::uint64_t> got;
+  std::thread reader([&] {
+    std::string msg;
+    while (got.size() < kTotal && !fast.read(msg, 10s)) got.push_back(parse_json(msg).at("seq").to_number<std::uint64_t>());
+  });
+  // Paced like a busy bus: 10 x 1 KiB every 5 ms (~2 MB/s), on the loop.
+  std::promise<void> published;
+  auto timer = std::make_shared<net::steady_timer>(ts.ioc());
+  auto seq = std::make_shared<std::uint64_t>(0);
+  std::function<void()> tick = [&, timer, seq] {
+    for (int i = 0; i < 10 && *seq < kTotal; ++i) ts.server().publish(make_event(EventKind::Tpdo, 1, 5, ++*seq, 1000));
+    if (*seq >= kTotal) return published.set_value();
+    timer->expires_after(5ms);
+    timer->async_wait([&](error_code) { tick(); });
+  };
+  net::post(ts.ioc(), tick);
+  ASSERT_EQ(published.get_future().wait_for(15s), std::future_status::ready);
+  reader.join();
+  ASSERT_EQ(got.size(), kTotal);
+  for (std::uint64_t i = 0; i < kTotal; ++i) ASSERT_EQ(got[i], i + 1);  // nothing lost for the fast one
+  auto st = ts.server().stats();
+  EXPECT_GT(st.ws_messages_dropped, 0u);
+  EXPECT_EQ(st.ws_clients_closed_slow, 1u);
+  EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 1; }));
+}
+
+TEST(WebSocket, PingKeepAlive) {
+  HttpConfig cfg = quick_config();
+  cfg.ws_ping_interval = 150ms;
+  TestServer ts(cfg);
+  WsClient alive(ts.port());
+  WsClient silent(ts.port());  // never reads, so never answers a ping
+  ASSERT_FALSE(alive.ec);
+  ASSERT_FALSE(silent.ec);
+  ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 2; }));
+  // Reading answers pings (Beast does); nothing else arrives meanwhile.
+  auto reading = std::async(std::launch::async, [&] {
+    std::string msg;
+    return alive.read(msg, 1500ms);
+  });
+  // The silent client is dropped after about two intervals; the answering
+  // one stays.
+  EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 1; }, 1200ms));
+  EXPECT_EQ(reading.get(), net::error::timed_out);
+  EXPECT_GE(alive.pings, 2);
+}
+
+TEST(WebSocket, StopClosesClientsWithGoingAway) {
+  auto ts = std::make_unique<TestServer>(quick_config());
+  WsClient ws(ts->port());
+  ASSERT_FALSE(ws.ec);
+  ASSERT_TRUE(ts->wait_until([&] { return ts->server().stats().ws_clients == 1; }));
+  ts->on_io([&] { ts->server().stop(); });
+  std::string msg;
+  EXPECT_EQ(ws.read(msg), websocket::error::closed);
+  EXPECT_EQ(ws.ws.reason().code, websocket::close_code::going_away);
+}
+
+// --- TLS --------------------------------------------------------------------
+
+namespace {
+
+// Self-signed EC certificate for "localhost"/127.0.0.1, written as PEM.
+void make_self_signed(const fs::path& cert, const fs::path& key) {
+  EVP_PKEY* pkey = EVP_EC_gen("P-256");
+  ASSERT_NE(pkey, nullptr);
+  X509* x = X509_new();
+  X509_set_version(x, 2);
+  ASN1_INTEGER_set(X509_get_serialNumber(x), 1);
+  X509_gmtime_adj(X509_getm_notBefore(x), -60);
+  X509_gmtime_adj(X509_getm_notAfter(x), 3600);
+  X509_set_pubkey(x, pkey);
+  X509_NAME* name = X509_get_subject_name(x);
+  X509_NAME_add_entry_by_txt(name, "CN", MBSTRING_ASC, reinterpret_cast<const unsigned char*>("localhost"), -1, -1,
+                             0);
+  X509_set_issuer_name(x, name);
+  ASSERT_GT(X509_sign(x, pkey, EVP_sha256()), 0);
+  FILE* f = std::fopen(cert.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  PEM_write_X509(f, x);
+  std::fclose(f);
+  f = std::fopen(key.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  PEM_write_PrivateKey(f, pkey, nullptr, nullptr, 0, nullptr, nullptr);
+  std::fclose(f);
+  X509_free(x);
+  EVP_PKEY_free(pkey);
+}
+
+}  // namespace
+
+class Tls : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("http_tls_" + std::to_string(std::random_device{}()));
+    fs::create_directories(dir_);
+    make_self_signed(dir_ / "cert.pem", dir_ / "key.pem");
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  HttpConfig config() {
+    HttpConfig c = quick_config();
+    c.cert_file = dir_ / "cert.pem";
+    c.key_file = dir_ / "key.pem";
+    return c;
+  }
+  fs::path dir_;
+};
+
+TEST_F(Tls, HttpsAndWssWorkAndPlainHttpIsRefused) {
+  TestServer ts(config(), [](HttpServer& s) { s.add_route("GET", "/api/v1/gateway", echo); });
+  net::ssl::context ctx(net::ssl::context::tls_client);
+  ctx.load_verify_file((dir_ / "cert.pem").string());
+  ctx.set_verify_mode(net::ssl::verify_peer);
+
+  {
+    Driver d;
+    beast::ssl_stream<beast::tcp_stream> s(d.ioc, ctx);
+    auto cancel = [&] { beast::get_lowest_layer(s).socket().close(); };
+    ASSERT_FALSE(d.run([&](auto h) { beast::get_lowest_layer(s).socket().async_connect({net::ip::make_address("127.0.0.1"), ts.port()}, h); }, cancel));
+    auto ec = d.run([&](auto h) { s.async_handshake(net::ssl::stream_base::client, h); }, cancel);
+    ASSERT_FALSE(ec) << ec.message();
+    for (int i = 0; i < 2; ++i) {  // keep-alive over TLS
+      bhttp::request<bhttp::string_body> req{bhttp::verb::get, "/api/v1/gateway", 11};
+      req.set(bhttp::field::host, "localhost");
+      ASSERT_FALSE(d.run([&](auto h) { bhttp::async_write(s, req, h); }, cancel));
+      beast::flat_buffer buf;
+      bhttp::response<bhttp::string_body> res;
+      ASSERT_FALSE(d.run([&](auto h) { bhttp::async_read(s, buf, res, h); }, cancel));
+      EXPECT_EQ(res.result_int(), 200u);
+      EXPECT_EQ(parse_json(res.body()).at("path"), "/api/v1/gateway");
+    }
+  }
+  {
+    Driver d;
+    websocket::stream<beast::ssl_stream<beast::tcp_stream>> ws(d.ioc, ctx);
+    auto cancel = [&] { beast::get_lowest_layer(ws).socket().close(); };
+    ASSERT_FALSE(d.run([&](auto h) { beast::get_lowest_layer(ws).socket().async_connect({net::ip::make_address("127.0.0.1"), ts.port()}, h); }, cancel));
+    ASSERT_FALSE(d.run([&](auto h) { ws.next_layer().async_handshake(net::ssl::stream_base::client, h); }, cancel));
+    auto ec = d.run([&](auto h) { ws.async_handshake("localhost", "/api/v1/events", h); }, cancel);
+    ASSERT_FALSE(ec) << ec.message();
+    ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 1; }));
+    ts.publish(make_event(EventKind::Emcy, 1, 5, 9));
+    beast::flat_buffer buf;
+    ASSERT_FALSE(d.run([&](auto h) { ws.async_read(buf, h); }, cancel));
+    EXPECT_EQ(parse_json(beast::buffers_to_string(buf.data())).at("seq"), 9);
+  }
+  {
+    HttpClient plain(ts.port());
+    ASSERT_FALSE(plain.ec);
+    auto out = plain.raw("GET /api/v1/gateway HTTP/1.1\r\nHost: a\r\n\r\n");
+    EXPECT_EQ(out.find("HTTP/1.1 200"), std::string::npos) << out;
+    EXPECT_EQ(out.find("/api/v1/gateway"), std::string::npos);
+    EXPECT_TRUE(plain.ec);  // closed by the server
+    EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().tls_handshake_failures >= 1; }));
+  }
+}
+
+TEST(TlsConfig, BadFilesAreRefusedAtConstruction) {
+  net::io_context ioc;
+  HttpConfig c;
+  c.cert_file = "/nonexistent/cert.pem";
+  c.key_file = "/nonexistent/key.pem";
+  EXPECT_THROW(HttpServer(ioc, c), std::runtime_error);
+  c.key_file.clear();
+  EXPECT_THROW(HttpServer(ioc, c), std::runtime_error);
+}
