@@ -41,6 +41,10 @@ struct EncodedEvent {
   bool retained = false;
   std::string json;    // proto3 canonical JSON of the message
   std::string binary;  // protobuf wire encoding of the same message
+  // The WebSocket frames: EventEnvelope {kind, topic, <kind>: message}, so a
+  // client knows what each message is without parsing the topic.
+  std::string ws_json;
+  std::string ws_binary;
 };
 
 using EncodedEventPtr = std::shared_ptr<const EncodedEvent>;

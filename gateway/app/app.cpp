@@ -265,9 +265,9 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
 
   if (cfg.simulated) {
     canopen::sim::SimulatorOptions so;
-    so.heartbeat = std::chrono::milliseconds(500);
-    so.tpdo_period = std::chrono::milliseconds(200);
-    so.emcy_period = std::chrono::milliseconds(20000);
+    so.heartbeat = cfg.simulation.heartbeat;
+    so.tpdo_period = cfg.simulation.tpdo_period;
+    so.emcy_period = cfg.simulation.emcy_period;
     n.simulator = std::make_unique<canopen::sim::Simulator>(
         io_, *n.memory_devices, so, [this, label](std::string_view line) {
           log_.debug(label + " simulator: " + std::string(line));

@@ -157,12 +157,27 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
 }
 
 void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id, const std::string& dir) {
-  a.expect_map({"interface", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "nodes"});
+  a.expect_map({"interface", "simulated", "simulation", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "nodes"});
   auto iface = a.get("interface");
-  if (!iface) a.fail("missing key 'interface' (a SocketCAN interface such as can0)");
-  net.interface = iface->str();
-  if (net.interface.empty() || net.interface.size() > 15 || net.interface.find_first_of("/: \t") != std::string::npos)
-    iface->fail("'" + net.interface + "' is not an interface name");
+  if (auto sim = a.get("simulated")) net.simulated = sim->boolean();
+  if (net.simulated) {
+    // The demo's devices on an in-process bus: for trying dashboards and
+    // pipelines without hardware.
+    if (iface) iface->fail("a simulated network has no interface");
+    if (auto n = a.get("nodes")) n->fail("a simulated network has the built-in devices (nodes 5, 10, 11)");
+    if (auto s = a.get("simulation")) {
+      s->expect_map({"tpdo-period-ms", "heartbeat-ms", "emcy-period-ms"});
+      if (auto v = s->get("tpdo-period-ms")) net.simulation.tpdo_period = ms(*v);
+      if (auto v = s->get("heartbeat-ms")) net.simulation.heartbeat = ms(*v);
+      if (auto v = s->get("emcy-period-ms")) net.simulation.emcy_period = ms(*v, 3'600'000);
+    }
+  } else {
+    if (auto s = a.get("simulation")) s->fail("only for a network with simulated: true");
+    if (!iface) a.fail("missing key 'interface' (a SocketCAN interface such as can0)");
+    net.interface = iface->str();
+    if (net.interface.empty() || net.interface.size() > 15 || net.interface.find_first_of("/: \t") != std::string::npos)
+      iface->fail("'" + net.interface + "' is not an interface name");
+  }
   if (auto v = a.get("bitrate")) net.bitrate = static_cast<std::uint32_t>(v->integer(1000, 8'000'000));
   net.node_id = default_node_id;
   if (auto v = a.get("node-id")) net.node_id = static_cast<std::uint8_t>(v->integer(1, 127));
@@ -352,7 +367,8 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
     for (const auto& item : n->items()) {
       NetworkConfig net;
       parse_network(item, net, default_node_id, dir);
-      if (!ifaces.insert(net.interface).second) item.fail("interface " + net.interface + " is configured twice");
+      if (!net.simulated && !ifaces.insert(net.interface).second)
+        item.fail("interface " + net.interface + " is configured twice");
       c.networks.push_back(std::move(net));
     }
   }

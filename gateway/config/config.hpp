@@ -58,9 +58,17 @@ struct TimeConfig {
   std::chrono::milliseconds period{1000};
 };
 
+// The built-in simulated devices of a simulated network (as in --demo).
+struct SimulationConfig {
+  std::chrono::milliseconds tpdo_period{200};   // new process values; 0 = never change
+  std::chrono::milliseconds heartbeat{500};
+  std::chrono::milliseconds emcy_period{20000};  // 0 = no periodic EMCY
+};
+
 struct NetworkConfig {
   std::string interface;     // SocketCAN interface; "" for the simulated demo network
-  bool simulated = false;    // --demo: in-process bus with simulated devices
+  bool simulated = false;    // --demo or simulated: true: in-process bus with simulated devices
+  SimulationConfig simulation;
   std::uint32_t bitrate = 0; // informative only (the interface is configured outside)
   std::uint8_t node_id = 127;  // the gateway's own node-ID on this network
   std::chrono::milliseconds heartbeat_producer{1000};  // the gateway's 1017h

@@ -72,10 +72,13 @@ class SendQueue {
   struct Item {
     EncodedEventPtr event;  // null for a control message
     std::string control;    // JSON text of a control message
-    bool binary = false;    // send as a binary frame (event->binary)
+    bool binary = false;    // send as a binary frame (event->ws_binary)
+    // The event's envelope (kind, topic, message); events encoded without
+    // one (tests) fall back to the bare message.
     std::string_view payload() const {
-      return event ? (binary ? std::string_view{event->binary} : std::string_view{event->json})
-                   : std::string_view{control};
+      if (!event) return control;
+      if (binary) return event->ws_binary.empty() ? event->binary : event->ws_binary;
+      return event->ws_json.empty() ? event->json : event->ws_json;
     }
   };
 

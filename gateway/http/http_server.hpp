@@ -68,8 +68,9 @@ struct HttpConfig {
   std::filesystem::path static_dir;
   std::size_t max_static_file_bytes = 16 * 1024 * 1024;
 
-  // WebSocket /api/v1/events: JSON text frames (ev->json) by default;
-  // "?format=protobuf" gives binary frames (ev->binary) instead. The client
+  // WebSocket /api/v1/events: JSON text frames (ev->ws_json, the
+  // EventEnvelope {kind, topic, <kind>: event}) by default;
+  // "?format=protobuf" gives binary frames (ev->ws_binary) instead. The client
   // sends its filter as JSON text (schema: EventFilter in event_stream.hpp)
   // and gets {"subscribed":<filter>} or {"error":<problem>} back as text.
   // Origins allowed to open it from a browser, e.g. "http://localhost:8080";

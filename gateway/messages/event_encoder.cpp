@@ -124,6 +124,9 @@ std::shared_ptr<EncodedEvent> make(EventKind kind, const Header& h, std::string 
 template <typename M>
 void finish(EncodedEvent& e, const M& m) {
   m.SerializeToString(&e.binary);
+  // The WebSocket frames, built once here from the payloads (no re-encoding).
+  e.ws_json = envelope_json(e);
+  e.ws_binary = envelope_binary(e);
 }
 
 class Encoder {

@@ -261,7 +261,13 @@ bool Simulator::raise_emcy(std::uint8_t node, std::uint16_t code) {
 
 void Simulator::arm_values() {
   if (opt_.tpdo_period.count() <= 0) return;
-  value_timer_.expires_after(opt_.tpdo_period);
+  // Drift-free: the next tick is one period after the previous one's due
+  // time, so a busy loop catches up and the rate holds on average.
+  const auto now = std::chrono::steady_clock::now();
+  if (value_due_ == std::chrono::steady_clock::time_point{} || value_due_ + opt_.tpdo_period * 50 < now)
+    value_due_ = now;  // first tick, or hopelessly behind (suspended): restart from now
+  value_due_ += opt_.tpdo_period;
+  value_timer_.expires_at(value_due_);
   value_timer_.async_wait([this](const boost::system::error_code& ec) {
     if (ec || !running_) return;
     tick_values();

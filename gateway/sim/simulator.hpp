@@ -99,6 +99,7 @@ class Simulator {
   boost::asio::steady_timer value_timer_;
   boost::asio::steady_timer emcy_timer_;
   TimePoint started_{};
+  std::chrono::steady_clock::time_point value_due_{};  // due time of the next value tick
   std::uint64_t ticks_ = 0;
   // Frames one simulated node sent, for the others (the channel does not
   // echo our own frames); drained from the io_context.

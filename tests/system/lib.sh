@@ -10,6 +10,7 @@ GW_PID=
 fail() {
   echo "FAIL: $*"
   [ -f "$GW_LOG" ] && { echo "--- gateway log (last 40 lines)"; tail -n 40 "$GW_LOG"; }
+  [ -f "$GW_LOG" ] && { echo "--- gateway mqtt lines"; grep -a "mqtt" "$GW_LOG" | grep -v " rx " | tail -n 25; }
   for extra in "$T/mosquitto.log" "$T/mqtt.log" "$T/sim.log"; do
     [ -s "$extra" ] && { echo "--- $extra (last 15 lines)"; tail -n 15 "$extra"; }
   done

@@ -141,7 +141,8 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
   EXPECT_EQ(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 200\n"),
             "gw.yaml:4: networks[0].nodes[0].id: 200 is out of range 1..127");
   EXPECT_EQ(config_error("networks:\n  - interface: can0\n    bitrat: 5\n"),
-            "gw.yaml:3: networks[0].bitrat: unknown key (known here: interface, bitrate, node-id, heartbeat-ms, "
+            "gw.yaml:3: networks[0].bitrat: unknown key (known here: interface, simulated, simulation, bitrate, node-id, "
+            "heartbeat-ms, "
             "sync, time, nodes)");
   EXPECT_THAT(config_error("networks:\n  - bitrate: 500000\n"), HasSubstr("networks[0]: missing key 'interface'"));
   EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        eds: /nope.eds\n"),
@@ -235,6 +236,22 @@ TEST(Config, DemoAddsASimulatedNetworkWithoutAuth) {
   EXPECT_FALSE(c.http.auth);
   EXPECT_FALSE(c.mqtt.enabled);  // MQTT only when asked for
   EXPECT_FALSE(c.gateway_id.empty());
+}
+
+TEST(Config, SimulatedNetworksInTheFile) {
+  const Config c = parse_config("networks:\n  - simulated: true\n    simulation: {tpdo-period-ms: 5, heartbeat-ms: 100}\n"
+                                "  - interface: can0\n",
+                                "gw.yaml");
+  ASSERT_EQ(c.networks.size(), 2U);
+  EXPECT_TRUE(c.networks[0].simulated);
+  EXPECT_EQ(c.networks[0].simulation.tpdo_period, 5ms);
+  EXPECT_EQ(c.networks[0].simulation.heartbeat, 100ms);
+  EXPECT_EQ(c.networks[0].simulation.emcy_period, 20000ms);
+  EXPECT_FALSE(c.networks[1].simulated);
+  EXPECT_THAT(config_error("networks:\n  - {simulated: true, interface: can0}\n"), HasSubstr("has no interface"));
+  EXPECT_THAT(config_error("networks:\n  - {simulated: true, nodes: [{id: 3}]}\n"), HasSubstr("built-in devices"));
+  EXPECT_THAT(config_error("networks:\n  - {interface: can0, simulation: {heartbeat-ms: 1}}\n"),
+              HasSubstr("only for a network with simulated: true"));
 }
 
 TEST(Config, NothingToRunIsAnError) {

@@ -89,6 +89,9 @@ M check_consistent(const EncodedEvent& e) {
   EXPECT_EQ(env.kind(), std::string(to_string(e.kind)));
   EXPECT_EQ(env.topic(), e.topic);
   const std::string env_json = envelope_json(e);
+  // The WebSocket frames are built once, with the event.
+  EXPECT_EQ(e.ws_json, env_json);
+  EXPECT_EQ(e.ws_binary, envelope_binary(e));
   EXPECT_TRUE(json_equal(json::parse(env_json), json::parse(protobuf_json(env)))) << env_json;
   pb::EventEnvelope env_back;
   EXPECT_TRUE(google::protobuf::util::JsonStringToMessage(env_json, &env_back).ok());
