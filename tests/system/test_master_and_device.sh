@@ -17,8 +17,9 @@ start_gateway --can vcan0 --eds 5="$EDS" --log-level debug
 DEV_PID=$!
 wait_for "$DEV_LOG" "^ready" 20
 
-wait_for "$GW_LOG" "node 5 pre-operational \(boot-up\)" 10
-pass "gateway saw node 5 boot up, pre-operational"
+wait_for "$GW_LOG" "node 5 initialising \(boot-up\)" 10
+wait_for "$GW_LOG" "node 5 pre-operational \(heartbeat\)" 10
+pass "gateway saw node 5 boot up, then pre-operational"
 
 # Pre-operational: no PDOs (7.3.2.2.5), so nothing decoded yet.
 sleep 0.6

@@ -33,6 +33,7 @@ pass "retained online status"
 
 start_sim "$T/sim.log" --node 5="$EDS_DIR/cia402-drive.eds" --node 10="$EDS_DIR/cia401-io-module.eds" \
   --heartbeat 200 --tpdo-period 100 --emcy-period 1500
+wait_for "$T/mqtt.log" "^canopen/$GW/1/5/state .*\"state\": ?\"initialising\".*\"cause\": ?\"boot-up\"" 15
 wait_for "$T/mqtt.log" "^canopen/$GW/1/5/boot .*\"done\"" 15
 wait_for "$T/mqtt.log" "^canopen/$GW/1/5/state .*\"operational\"" 10
 wait_for "$T/mqtt.log" "^canopen/$GW/1/10/state .*\"operational\"" 10

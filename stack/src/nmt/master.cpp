@@ -60,7 +60,10 @@ void NmtMaster::on_boot_up(std::uint8_t node, const can::Frame& f, TimePoint now
   NodeStatus& st = nodes_[node];
   const std::optional<NmtState> previous = st.state;
   ++st.boot_ups;
-  st.state = NmtState::PreOperational;
+  // The boot-up message carries state 0, initialising (7.2.8.3.3); the node
+  // then enters pre-operational by itself, which its next heartbeat or
+  // guarding response reports as a change.
+  st.state = NmtState::Initialising;
   st.last_seen = now;
   st.lost = false;
   if (auto c = consumers_.find(node); c != consumers_.end()) c->second.deadline = now + c->second.time;
@@ -69,7 +72,7 @@ void NmtMaster::on_boot_up(std::uint8_t node, const can::Frame& f, TimePoint now
     g->second.last_toggle = true;
     g->second.life_deadline = now + g->second.guard_time * g->second.life_factor;
   }
-  emit(NodeStateEvent{node, NmtState::PreOperational, previous, NodeStateEvent::Cause::BootUp}, f.timestamp);
+  emit(NodeStateEvent{node, NmtState::Initialising, previous, NodeStateEvent::Cause::BootUp}, f.timestamp);
 }
 
 void NmtMaster::on_heartbeat(std::uint8_t node, NmtState s, const can::Frame& f, TimePoint now) {

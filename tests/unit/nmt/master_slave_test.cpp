@@ -77,7 +77,7 @@ TEST(NmtMasterSlave, Heartbeat_7_2_8_3_BootUpStartHeartbeatLostAndRecovered) {
   n.bus.deliver();
   ASSERT_EQ(n.states.size(), 1U);
   EXPECT_EQ(n.states[0].cause, NodeStateEvent::Cause::BootUp);
-  EXPECT_EQ(n.states[0].state, NmtState::PreOperational);
+  EXPECT_EQ(n.states[0].state, NmtState::Initialising) << "the state the boot-up message carries";
   EXPECT_EQ(n.master->node(kSlave)->boot_ups, 1U);
 
   n.master->send_command(NmtCommand::Start, kSlave);
@@ -88,7 +88,7 @@ TEST(NmtMasterSlave, Heartbeat_7_2_8_3_BootUpStartHeartbeatLostAndRecovered) {
   EXPECT_EQ(n.heartbeats[0].state, NmtState::Operational);
   ASSERT_EQ(n.states.size(), 2U);
   EXPECT_EQ(n.states[1].cause, NodeStateEvent::Cause::Heartbeat);
-  EXPECT_EQ(n.states[1].previous, NmtState::PreOperational);
+  EXPECT_EQ(n.states[1].previous, NmtState::Initialising);
   EXPECT_EQ(n.states[1].state, NmtState::Operational);
 
   // The slave falls silent (link down): lost 250 ms after its last heartbeat.

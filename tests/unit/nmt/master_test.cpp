@@ -97,14 +97,15 @@ TEST_F(MasterTest, NodeControl_7_2_8_3_1_CommandFramesForOneNodeAndAll) {
 TEST_F(MasterTest, BootUp_7_2_8_3_3_BootUpIsReportedAndCounted) {
   const auto ts = can::Frame::Clock::time_point{} + 42s;
   EXPECT_TRUE(rx("705#00", ts));
-  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up -/pre-operational"}));
+  // The boot-up message carries state 0: initialising.
+  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up -/initialising"}));
   EXPECT_EQ(stamps.at(0), ts);
   rx("705#00");
-  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up pre-operational/pre-operational"}));
+  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up initialising/initialising"}));
   const NodeStatus* st = master.node(5);
   ASSERT_NE(st, nullptr);
   EXPECT_EQ(st->boot_ups, 2U);
-  EXPECT_EQ(st->state, NmtState::PreOperational);
+  EXPECT_EQ(st->state, NmtState::Initialising);
   EXPECT_EQ(st->last_seen, clock.now());
   EXPECT_EQ(master.node(6), nullptr);
 }
@@ -112,6 +113,8 @@ TEST_F(MasterTest, BootUp_7_2_8_3_3_BootUpIsReportedAndCounted) {
 TEST_F(MasterTest, Heartbeat_7_2_8_3_2_2_EveryHeartbeatIsAnEventStateChangesOnce) {
   rx("705#00");
   take_events();
+  rx("705#7F");  // the node entered pre-operational after its boot-up: one change
+  EXPECT_EQ(take_events(), (Strings{"hb 5 pre-operational", "state 5 heartbeat initialising/pre-operational"}));
   rx("705#7F");
   EXPECT_EQ(take_events(), (Strings{"hb 5 pre-operational"}));
   rx("705#05");
@@ -120,7 +123,7 @@ TEST_F(MasterTest, Heartbeat_7_2_8_3_2_2_EveryHeartbeatIsAnEventStateChangesOnce
   EXPECT_EQ(take_events(), (Strings{"hb 5 operational"}));
   rx("70A#04");  // a node never booted: previous unknown
   EXPECT_EQ(take_events(), (Strings{"hb 10 stopped", "state 10 heartbeat -/stopped"}));
-  EXPECT_EQ(master.node(5)->heartbeats, 3U);
+  EXPECT_EQ(master.node(5)->heartbeats, 4U);
 }
 
 TEST_F(MasterTest, Heartbeat_7_2_8_3_2_2_ForeignAndMalformedFramesAreIgnored) {
@@ -188,9 +191,9 @@ TEST_F(MasterTest, Heartbeat_7_2_8_3_2_BootUpCountsAsFirstHeartbeatAndClearsLost
   master.set_heartbeat_consumer(5, 100ms);
   rx("705#00");
   advance(100ms);
-  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up -/pre-operational", "state 5 lost pre-operational/-"}));
+  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up -/initialising", "state 5 lost initialising/-"}));
   rx("705#00");
-  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up pre-operational/pre-operational"}));
+  EXPECT_EQ(take_events(), (Strings{"state 5 boot-up initialising/initialising"}));
   EXPECT_FALSE(master.node(5)->lost);
 }
 
