@@ -31,7 +31,7 @@ cat > "$T/gw.yaml" <<YAML
 gateway: {id: $GW, state-dir: $T/state}
 networks:
   - simulated: true
-    simulation: {tpdo-period-ms: 2, heartbeat-ms: 500, emcy-period-ms: 0}
+    simulation: {tpdo-period-ms: 1, heartbeat-ms: 500, emcy-period-ms: 0}
 mqtt:
   uri: tcp://127.0.0.1:$MOSQ_PORT
   qos: {default: 1}
