@@ -7,8 +7,8 @@
 #     restart with the same state directory the events it had accepted
 #     before the kill still arrive (disk-backed queue).
 # Runs on the host, not in UML: this is about MQTT, so the CAN side is the
-# gateway's simulated network (the demo devices, values every 6 ms: about
-# 1,000 PDOs per second), and the machine's real speed matters here.
+# gateway's simulated network (the demo devices with new values every
+# millisecond: about 1,100 PDOs per second), and real speed matters here.
 TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
 export TMPDIR
 trap 'kill $MOSQ_PID $SUB_PID $GW_PID 2>/dev/null; rm -rf "$TMPDIR"' EXIT
