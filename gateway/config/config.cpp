@@ -433,6 +433,9 @@ Config merge(Config c, const CliOptions& cli) {
     sim.simulated = true;
     sim.interface = "";
     sim.node_id = own;
+    // The gateway produces SYNC there, so the drive's synchronous TPDOs
+    // (position, velocity) flow too.
+    sim.sync.period = std::chrono::milliseconds(100);
     c.networks.push_back(std::move(sim));
     c.http.auth = false;  // the demo is for looking at, on loopback
   }

@@ -232,6 +232,7 @@ TEST(Config, DemoAddsASimulatedNetworkWithoutAuth) {
   const Config c = merge(Config{}, cli);
   ASSERT_EQ(c.networks.size(), 1U);
   EXPECT_TRUE(c.networks[0].simulated);
+  EXPECT_EQ(c.networks[0].sync.period, 100ms) << "SYNC for the drive's synchronous TPDOs";
   EXPECT_TRUE(c.demo);
   EXPECT_FALSE(c.http.auth);
   EXPECT_FALSE(c.mqtt.enabled);  // MQTT only when asked for
