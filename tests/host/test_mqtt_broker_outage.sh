@@ -11,7 +11,7 @@
 # millisecond: about 1,100 PDOs per second), and real speed matters here.
 TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
 export TMPDIR
-trap 'kill $MOSQ_PID $SUB_PID $GW_PID 2>/dev/null; rm -rf "$TMPDIR"' EXIT
+trap 'kill $MOSQ_PID $SUB_PID $GW_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
 . "$(dirname "$0")/../system/lib.sh"
 GW=gw1
 MOSQ_PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
