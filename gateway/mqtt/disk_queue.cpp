@@ -84,7 +84,7 @@ DiskQueue::DiskQueue(DiskQueueOptions opts) : opts_(std::move(opts)) {
 }
 
 DiskQueue::~DiskQueue() {
-  sync();
+  sync();  // flushes first
   for (auto& [first, seg] : segments_) ::close(seg.fd);
   if (head_fd_ >= 0) ::close(head_fd_);
 }
@@ -107,6 +107,15 @@ void DiskQueue::read_head() {
 }
 
 void DiskQueue::write_head() {
+  if (opts_.buffered_writes) {
+    head_unwritten_ = true;  // flush() writes it
+    return;
+  }
+  persist_head();
+}
+
+void DiskQueue::persist_head() {
+  head_unwritten_ = false;
   // Alternate slots so a torn write leaves the other, older slot valid.
   ++head_generation_;
   char s[kSlot] = {};
@@ -185,8 +194,10 @@ void DiskQueue::replay_segment(std::uint64_t first, Segment& seg, bool /*last*/)
     counters_.truncated_bytes += file_size - off;
     if (::ftruncate(seg.fd, static_cast<off_t>(off)) != 0) throw_errno("truncate segment");
   }
-  seg.size = off;
+  seg.size = seg.written = off;
   counters_.disk_bytes += off;
+  tail_.clear();
+  tail_base_ = off;  // appends to the last replayed segment go after this
   // An empty segment still numbers from its name.
   while (next_seq_ < first) {
     entries_.push_back(Entry{first, 0, 0, 0, State::Dropped});
@@ -205,11 +216,14 @@ DiskQueue::Segment& DiskQueue::writable_segment(std::uint64_t seq, std::uint64_t
     auto& last = segments_.rbegin()->second;
     if (last.size == 0 || last.size + need <= opts_.segment_bytes) return last;
   }
+  if (!segments_.empty()) flush_segment(segments_.rbegin()->second);  // its buffer goes first
   const auto path = opts_.dir / segment_name(seq);
   int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw_errno("create " + path.string());
   Segment& seg = segments_[seq];
   seg.fd = fd;
+  tail_.clear();
+  tail_base_ = 0;
   delete_consumed_segments();  // the previous one may be fully acked already
   return seg;
 }
@@ -225,8 +239,20 @@ std::uint64_t DiskQueue::push(const QueuedMessage& m) {
   enforce_bounds(size);
 
   const std::uint64_t seq = next_seq_;
-  std::string rec(size, '\0');
-  char* p = rec.data();
+  Segment& seg = writable_segment(seq, size);
+  const std::uint64_t first = segments_.rbegin()->first;
+  if (opts_.buffered_writes && seg.size - seg.written + size > opts_.write_buffer_bytes) flush_segment(seg);
+  // The tail cache keeps at most about one segment; past that (a segment
+  // larger than the cap, or a huge record) it starts again after a flush.
+  const std::uint64_t cap = std::max<std::uint64_t>(opts_.segment_bytes, 1u << 20) + (1u << 16);
+  if (tail_.size() + size > cap) {
+    flush_segment(seg);
+    tail_.clear();
+    tail_base_ = seg.size;
+  }
+  const std::size_t at = tail_.size();
+  tail_.resize(at + size);
+  char* p = tail_.data() + at;
   put_le(p, body, 4);
   char* b = p + kHeader;
   put_le(b, seq, 8);
@@ -237,13 +263,15 @@ std::uint64_t DiskQueue::push(const QueuedMessage& m) {
   if (!m.payload.empty()) std::memcpy(b + kBodyFixed + tlen, m.payload.data(), m.payload.size());
   put_le(p + 4, crc32(b, body), 4);
 
-  Segment& seg = writable_segment(seq, size);
-  const std::uint64_t first = segments_.rbegin()->first;
-  if (!pwrite_all(seg.fd, rec.data(), rec.size(), seg.size)) {
-    int e = errno;
-    (void)::ftruncate(seg.fd, static_cast<off_t>(seg.size));  // no half record stays
-    errno = e;
-    throw_errno("append to message queue");
+  if (!opts_.buffered_writes) {
+    if (!pwrite_all(seg.fd, p, size, seg.size)) {
+      int e = errno;
+      (void)::ftruncate(seg.fd, static_cast<off_t>(seg.size));  // no half record stays
+      tail_.resize(at);
+      errno = e;
+      throw_errno("append to message queue");
+    }
+    seg.written = seg.size + size;
   }
   entries_.push_back(Entry{first, seg.size, static_cast<std::uint32_t>(size), static_cast<std::uint8_t>(m.qos == 0 ? 0 : 1), State::Live});
   (m.qos == 0 ? live_qos0_ : live_qos1_).push_back(seq);
@@ -333,6 +361,9 @@ void DiskQueue::delete_consumed_segments() {
     auto it = segments_.begin();
     auto nx = std::next(it);
     if (nx->first > head_) break;
+    // The position goes to disk before the file it makes obsolete goes.
+    if (head_unwritten_) persist_head();
+    if (rd_valid_ && rd_segment_ == it->first) rd_valid_ = false;
     ::close(it->second.fd);
     counters_.disk_bytes -= it->second.size;
     ::unlink((opts_.dir / segment_name(it->first)).c_str());
@@ -345,11 +376,9 @@ bool DiskQueue::next(Item& out) {
     const std::uint64_t seq = cursor_++;
     Entry* e = entry(seq);
     if (e == nullptr || e->state != State::Live) continue;
-    auto it = segments_.find(e->segment);
-    if (it == segments_.end()) continue;
-    std::string rec(e->size, '\0');
-    if (!pread_all(it->second.fd, rec.data(), rec.size(), e->offset)) throw_errno("read message queue");
-    const char* b = rec.data() + kHeader;
+    const char* rec = record(*e);
+    if (rec == nullptr) continue;
+    const char* b = rec + kHeader;
     const std::size_t body = e->size - kHeader;
     const auto tlen = static_cast<std::size_t>(get_le(b + 10, 2));
     out.seq = seq;
@@ -360,6 +389,26 @@ bool DiskQueue::next(Item& out) {
     return true;
   }
   return false;
+}
+
+const char* DiskQueue::record(const Entry& e) {
+  auto it = segments_.find(e.segment);
+  if (it == segments_.end()) return nullptr;
+  if (std::next(it) == segments_.end() && e.offset >= tail_base_)
+    return tail_.data() + (e.offset - tail_base_);  // the last segment's tail, in memory
+  if (!rd_valid_ || rd_segment_ != e.segment || e.offset < rd_offset_ || e.offset + e.size > rd_offset_ + rd_buf_.size()) {
+    // Read ahead (records written before this run, or older segments) up
+    // to what is in the file.
+    const std::uint64_t end = std::min<std::uint64_t>(it->second.written, e.offset + std::max<std::uint64_t>(e.size, 256u << 10));
+    if (end < e.offset + e.size) throw std::system_error(EIO, std::generic_category(), "read message queue: record not in file");
+    rd_valid_ = false;
+    rd_buf_.resize(end - e.offset);
+    if (!pread_all(it->second.fd, rd_buf_.data(), rd_buf_.size(), e.offset)) throw_errno("read message queue");
+    rd_segment_ = e.segment;
+    rd_offset_ = e.offset;
+    rd_valid_ = true;
+  }
+  return rd_buf_.data() + (e.offset - rd_offset_);
 }
 
 void DiskQueue::rewind() { cursor_ = head_; }
@@ -386,7 +435,35 @@ bool DiskQueue::ack(std::uint64_t seq) {
   return true;
 }
 
+void DiskQueue::flush_segment(Segment& seg) {
+  if (seg.written >= seg.size) return;
+  // Only the last segment has buffered bytes, all in tail_.
+  const char* p = tail_.data() + (seg.written - tail_base_);
+  if (!pwrite_all(seg.fd, p, seg.size - seg.written, seg.written)) {
+    int e = errno;
+    (void)::ftruncate(seg.fd, static_cast<off_t>(seg.written));  // no half record stays
+    errno = e;
+    throw_errno("append to message queue");
+  }
+  seg.written = seg.size;
+}
+
+bool DiskQueue::flush_pending() const {
+  return !segments_.empty() && segments_.rbegin()->second.written < segments_.rbegin()->second.size;
+}
+
+void DiskQueue::flush(bool with_position) {
+  if (!segments_.empty()) flush_segment(segments_.rbegin()->second);
+  if (with_position && head_unwritten_) persist_head();
+}
+
 void DiskQueue::sync() {
+  try {
+    flush();
+    if (head_unwritten_) persist_head();
+  } catch (const std::system_error&) {
+    // Still buffered; the next flush() or sync() tries again.
+  }
   for (auto& [first, seg] : segments_) {
     if (seg.dirty) {
       (void)::fdatasync(seg.fd);

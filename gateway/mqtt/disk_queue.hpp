@@ -6,13 +6,29 @@
 // alternating 24-byte slots [u64 generation][u64 head seq][u32 CRC][pad], the
 // head being the first sequence number not yet acknowledged (or dropped).
 //
-// Durability: push() hands each record to the kernel with one write() before
-// it returns, so a kill -9 of the process loses nothing (the data is in the
-// page cache). There is no fsync per message: the owner calls sync() on a
-// timer (MqttPublisher: every 100 ms by default), so a power loss loses at
-// most the last interval. On open, records from the head on are replayed; a
+// Durability: by default (write-through) push() hands each record to the
+// kernel with one write() before it returns, so a kill -9 of the process
+// loses nothing (the data is in the page cache). With
+// DiskQueueOptions::buffered_writes, push() only appends the record to an
+// in-memory write buffer, and ack() only notes the new position; flush()
+// then writes all buffered records with one write(), and sync() or
+// flush(true) writes the position (as does deleting a fully acked segment,
+// and the destructor). The owner must call flush() soon (MqttPublisher:
+// once per io loop turn, from a handler posted by the first publish of the
+// turn, before the messages go to Paho), and push() flushes by itself
+// before the buffer would exceed write_buffer_bytes. So a kill -9 loses at
+// most the records pushed since the last flush(); a position not yet
+// written only makes already acked messages come again after a crash.
+// There is no fsync per message: the owner calls sync() on a timer
+// (MqttPublisher: every 100 ms by default), so a power loss loses at most
+// the last interval. On open, records from the head on are replayed; a
 // torn or corrupt record (bad length or CRC) ends its segment, which is
 // truncated there (counted in Counters::truncated_bytes).
+//
+// Reading: next() serves records of the segment being appended to from
+// memory (the last segment's bytes appended in this run, up to about
+// segment_bytes, are kept) and older ones with 256 KiB read-ahead, so
+// handing out costs no read() per message.
 //
 // Delivery is at least once: acks are recorded per message, but the head
 // only moves over a contiguous acked prefix, so after a crash messages acked
@@ -33,7 +49,8 @@
 // Thread safety: none; one owner thread (the io thread in the gateway).
 // Errors: the constructor throws std::system_error when the directory cannot
 // be created or read; push() throws std::system_error when the write fails
-// (disk full): the message is then not queued.
+// (disk full): the message is then not queued (buffered_writes: when the
+// flush it needs first fails; flush() reports later failures).
 #pragma once
 
 #include <cstdint>
@@ -56,6 +73,9 @@ struct DiskQueueOptions {
   std::uint64_t max_bytes = 64ull << 20;      // record bytes not yet acked
   std::uint64_t max_messages = 1'000'000;     // messages not yet acked
   std::uint64_t segment_bytes = 4ull << 20;   // roll to a new file after this
+  // Batch writes: see "Durability" above; flush() must then be called.
+  bool buffered_writes = false;
+  std::size_t write_buffer_bytes = 64u << 10;  // push() flushes beyond this
 };
 
 class DiskQueue {
@@ -100,7 +120,15 @@ class DiskQueue {
   // The broker confirmed seq. Idempotent; unknown or old seqs are ignored.
   // Returns true if it was a pending message.
   bool ack(std::uint64_t seq);
-  // fdatasync the files written since the last call (the timer's job).
+  // Writes buffered records (buffered_writes; a no-op when nothing is
+  // pending), and with_position the ack position if it moved. Throws
+  // std::system_error when a write fails; the records then stay buffered
+  // (still handed out by next()) and the next flush() tries again.
+  void flush(bool with_position = false);
+  // True when flush() has something to write.
+  bool flush_pending() const;
+  // flush() and write the ack position, errors ignored (retried later),
+  // then fdatasync the files written since the last call (the timer's job).
   void sync();
 
   std::uint64_t depth() const { return live_; }
@@ -120,7 +148,8 @@ class DiskQueue {
   };
   struct Segment {
     int fd = -1;
-    std::uint64_t size = 0;
+    std::uint64_t size = 0;     // bytes appended (written + buffered)
+    std::uint64_t written = 0;  // bytes handed to the kernel
     bool dirty = false;
   };
 
@@ -128,6 +157,9 @@ class DiskQueue {
   void replay_segment(std::uint64_t first, Segment& seg, bool last);
   void read_head();
   void write_head();
+  void persist_head();
+  void flush_segment(Segment& seg);
+  const char* record(const Entry& e);
   Segment& writable_segment(std::uint64_t seq, std::uint64_t need);
   void drop(std::uint64_t seq, std::uint64_t& reason);
   void enforce_bounds(std::uint64_t incoming_bytes);
@@ -140,6 +172,15 @@ class DiskQueue {
   int head_fd_ = -1;
   std::uint64_t head_generation_ = 0;
   bool head_dirty_ = false;
+  bool head_unwritten_ = false;   // head_ moved, not yet written (buffered)
+  // Bytes [tail_base_, size) of the last segment: the write buffer (from its
+  // `written` on) and a read cache for next().
+  std::string tail_;
+  std::uint64_t tail_base_ = 0;
+  // Read-ahead for records in older segments (or before tail_base_).
+  std::string rd_buf_;
+  std::uint64_t rd_segment_ = 0, rd_offset_ = 0;
+  bool rd_valid_ = false;
   std::uint64_t head_ = 1;        // first seq not acked/dropped (persisted)
   std::uint64_t next_seq_ = 1;    // seq of the next push
   std::uint64_t cursor_ = 1;      // next seq next() hands out

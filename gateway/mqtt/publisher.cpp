@@ -6,8 +6,10 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/json.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdint>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <unordered_map>
@@ -64,25 +66,53 @@ std::string normalize_server_uri(const std::string& uri) {
   throw std::invalid_argument("MQTT URI must start with tcp://, ssl://, mqtt:// or mqtts://: " + uri);
 }
 
+// Delivery results collected from Paho's threads: the first one after the
+// io thread took the last batch posts one handler, which takes all that
+// arrived by then (one post per batch of PUBACKs, not per message).
+// Posting at once matters: waiting for a bigger batch keeps the window
+// from being refilled, and with nothing to send the client's delayed TCP
+// ACKs meet the broker's Nagle on PUBACKs (~40 ms stalls).
+struct DeliveryInbox {
+  struct Result {
+    std::uint64_t context;
+    bool ok;
+    int reason;
+  };
+  std::mutex mutex;
+  std::vector<Result> results;
+  bool posted = false;  // a handler is posted and has not taken them yet
+};
+
 // Paho threads call these; they only post to the io thread, holding the
 // Impl weakly so a late callback after destruction does nothing.
 class PahoListener : public ::mqtt::iaction_listener {
  public:
   enum class Kind { Connect, Delivery };
-  PahoListener(asio::io_context& io, std::weak_ptr<MqttPublisher::Impl> impl, Kind kind)
-      : io_(io), impl_(std::move(impl)), kind_(kind) {}
+  PahoListener(asio::io_context& io, std::weak_ptr<MqttPublisher::Impl> impl, Kind kind,
+               std::shared_ptr<DeliveryInbox> inbox = {})
+      : io_(io), impl_(std::move(impl)), kind_(kind), inbox_(std::move(inbox)) {}
   void on_success(const ::mqtt::token& tok) override;
   void on_failure(const ::mqtt::token& tok) override;
 
  private:
+  void deliver(std::uint64_t context, bool ok, int reason);
   asio::io_context& io_;
   std::weak_ptr<MqttPublisher::Impl> impl_;
   Kind kind_;
+  std::shared_ptr<DeliveryInbox> inbox_;
 };
+
+namespace {
+// The publisher batches the queue's writes (see publisher.hpp, Delivery).
+DiskQueueOptions buffered(DiskQueueOptions o) {
+  o.buffered_writes = true;
+  return o;
+}
+}  // namespace
 
 struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestHandler h)
-      : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(cfg.queue),
+      : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(buffered(cfg.queue)),
         sync_timer(io_ctx), retry_timer(io_ctx), drain_timer(io_ctx) {
     uri = normalize_server_uri(cfg.server_uri);
     version = cfg.mqtt_version >= 5 ? 5 : 4;
@@ -106,6 +136,17 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   int version = 5;
   // Listeners live as long as the Impl, longer than any client they serve.
   std::unique_ptr<PahoListener> connect_listener, delivery_listener;
+  std::shared_ptr<DeliveryInbox> inbox = std::make_shared<DeliveryInbox>();
+  std::vector<DeliveryInbox::Result> delivered;  // io thread's swap buffer
+  bool pump_posted = false;
+  std::size_t receive_max = 0;  // the broker's Receive Maximum (MQTT 5), 0: none
+  // The in-flight window; under the broker's Receive Maximum, leaving room
+  // for the status message and request replies.
+  std::size_t window() const {
+    if (receive_max == 0) return cfg.inflight_window;
+    const std::size_t cap = receive_max > 8 ? receive_max - 4 : receive_max;
+    return std::min(cap, cfg.inflight_window);
+  }
   std::unique_ptr<::mqtt::async_client> client;
   bool running = false;
   bool connected = false;
@@ -179,7 +220,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     running = true;
     std::weak_ptr<Impl> weak = weak_from_this();
     connect_listener = std::make_unique<PahoListener>(io, weak, PahoListener::Kind::Connect);
-    delivery_listener = std::make_unique<PahoListener>(io, weak, PahoListener::Kind::Delivery);
+    delivery_listener = std::make_unique<PahoListener>(io, weak, PahoListener::Kind::Delivery, inbox);
     make_client();
     arm_sync();
     connect();
@@ -195,6 +236,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     sync_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
       auto self = weak.lock();
       if (ec || !self || !self->running) return;
+      self->flush_queue(true);  // records and the ack position
       if (self->cfg.sync_interval.count() > 0) self->queue.sync();
       self->check_stall();
       self->arm_sync();
@@ -266,7 +308,8 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     connected = true;
     failures = 0;
     if (counters.connects++ > 0) ++counters.reconnects;
-    log.info("mqtt: connected to " + uri + " with MQTT " + (version == 5 ? "5" : "3.1.1"));
+    log.info("mqtt: connected to " + uri + " with MQTT " + (version == 5 ? "5" : "3.1.1") +
+             (receive_max > 0 ? ", receive maximum " + std::to_string(receive_max) : std::string()));
     try {
       auto online = ::mqtt::make_message(status_topic(), cfg.online_payload, 1, true);
       client->publish(online);
@@ -303,8 +346,12 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   }
 
   void drain() {
+    // Whoever drains (pump, delivery batch, reconnect, retry): what is sent
+    // is written to the queue's files first.
+    if (connected && queue.flush_pending()) flush_queue();
     DiskQueue::Item item;
-    while (connected && in_flight.size() < cfg.inflight_window && queue.next(item)) {
+    const std::size_t limit = window();
+    while (connected && in_flight.size() < limit && queue.next(item)) {
       auto msg = ::mqtt::make_message(item.msg.topic, item.msg.payload, item.msg.qos == 0 ? 0 : 1, item.msg.retained);
       try {
         client->publish(msg, to_context(item.seq << 16 | epoch), *delivery_listener);
@@ -324,11 +371,22 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
           arm_drain_retry();
           return;
         }
-        // Paho refuses this message (bad topic ...): drop it rather than
-        // block the queue forever.
-        ++counters.rejected;
-        queue.ack(item.seq);
-        log.warn("mqtt: dropping message to '" + item.msg.topic + "': " + e.what());
+        if (rc == MQTTASYNC_BAD_UTF8_STRING || rc == MQTTASYNC_NULL_PARAMETER || rc == MQTTASYNC_TOPICNAME_TRUNCATED ||
+            rc == MQTTASYNC_BAD_STRUCTURE || rc == MQTTASYNC_BAD_QOS) {
+          // Paho refuses this very message (bad topic ...): drop it rather
+          // than block the queue forever.
+          ++counters.rejected;
+          queue.ack(item.seq);
+          log.warn("mqtt: dropping message to '" + item.msg.topic + "': " + e.what());
+          continue;
+        }
+        // Anything else is the connection's state (e.g. going down while the
+        // broker stops), not the message's: keep it and try again later, so
+        // nothing accepted is ever dropped for it.
+        queue.rewind_to(item.seq);
+        arm_drain_retry();
+        if (log.enabled(LogLevel::Debug)) log.debug(std::string("mqtt: publish refused for now: ") + e.what());
+        return;
       }
     }
   }
@@ -345,6 +403,45 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     });
   }
 
+  // All delivery results that arrived since the last batch, then one drain
+  // for all of them (the ack position goes to disk on the sync tick).
+  void on_deliveries() {
+    delivered.clear();
+    {
+      std::lock_guard<std::mutex> lock(inbox->mutex);
+      delivered.swap(inbox->results);
+      inbox->posted = false;
+    }
+    for (const auto& r : delivered) on_delivery(r.context, r.ok, r.reason);
+    drain();
+  }
+
+  // Once per io loop turn (posted by the first publish after the last
+  // one): write the records the queue buffered, then hand them to Paho. So
+  // a message is in the kernel before it is sent, and Paho gets the turn's
+  // messages in one burst (its send thread wakes once, not per message).
+  void schedule_pump() {
+    if (pump_posted) return;
+    pump_posted = true;
+    asio::post(io, [weak = weak_from_this()] {
+      if (auto self = weak.lock()) {
+        self->pump_posted = false;
+        self->flush_queue();
+        self->drain();
+      }
+    });
+  }
+
+  void flush_queue(bool with_position = false) {
+    try {
+      queue.flush(with_position);
+    } catch (const std::exception& e) {
+      // Kept in memory and retried (next publish, ack or sync tick).
+      log.error(std::string("mqtt: queue write failed: ") + e.what());
+    }
+  }
+
+  // One result; the caller (on_deliveries) drains after the batch.
   void on_delivery(std::uint64_t context, bool ok, int reason) {
     const std::uint64_t seq = context >> 16;
     const auto sent_epoch = static_cast<std::uint16_t>(context & 0xffff);
@@ -365,7 +462,6 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     if (!ok && log.enabled(LogLevel::Debug))
       log.debug("mqtt: delivery of " + std::to_string(seq) + " failed, reason " + std::to_string(reason) +
                 (connected ? " (connected)" : ""));
-    drain();
   }
 
   void publish(const QueuedMessage& m) {
@@ -377,7 +473,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
       log.error(std::string("mqtt: queue write failed: ") + e.what());
       return;
     }
-    drain();
+    schedule_pump();
   }
 
   // --- requests ---------------------------------------------------------
@@ -546,6 +642,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     }
     connected = false;
     connecting = false;
+    flush_queue(true);
     queue.sync();
   }
 
@@ -565,12 +662,39 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
 void PahoListener::on_success(const ::mqtt::token& tok) {
   const std::uint64_t id = from_context(tok.get_user_context());
   if (kind_ == Kind::Connect) {
-    asio::post(io_, [w = impl_, id] {
-      if (auto self = w.lock()) self->on_connect_result(id, true, 0, 0);
+    // MQTT 5: the broker's Receive Maximum (CONNACK; mosquitto's
+    // max_inflight_messages, 20 by default) caps the QoS 1 messages in
+    // flight. Paho holds back more than that, so the window must not exceed
+    // it (or sending stalls).
+    std::size_t receive_max = 0;
+    try {
+      const auto props = tok.get_connect_response().get_properties();
+      if (props.contains(::mqtt::property::RECEIVE_MAXIMUM))
+        receive_max = static_cast<std::size_t>(::mqtt::get<int>(props, ::mqtt::property::RECEIVE_MAXIMUM));
+    } catch (const std::exception&) {
+      // No connect response (3.1.1) or no such property: no cap.
+    }
+    asio::post(io_, [w = impl_, id, receive_max] {
+      if (auto self = w.lock()) {
+        self->receive_max = receive_max;
+        self->on_connect_result(id, true, 0, 0);
+      }
     });
   } else {
-    asio::post(io_, [w = impl_, id] {
-      if (auto self = w.lock()) self->on_delivery(id, true, 0);
+    deliver(id, true, 0);
+  }
+}
+
+void PahoListener::deliver(std::uint64_t context, bool ok, int reason) {
+  bool post = false;
+  {
+    std::lock_guard<std::mutex> lock(inbox_->mutex);
+    inbox_->results.push_back({context, ok, reason});
+    if (!inbox_->posted) post = inbox_->posted = true;
+  }
+  if (post) {
+    asio::post(io_, [w = impl_] {
+      if (auto self = w.lock()) self->on_deliveries();
     });
   }
 }
@@ -584,9 +708,7 @@ void PahoListener::on_failure(const ::mqtt::token& tok) {
       if (auto self = w.lock()) self->on_connect_result(id, false, rc, reason);
     });
   } else {
-    asio::post(io_, [w = impl_, id, reason] {
-      if (auto self = w.lock()) self->on_delivery(id, false, reason);
-    });
+    deliver(id, false, reason);
   }
 }
 

@@ -1,8 +1,19 @@
 // MQTT side of the gateway: publishes encoded events through a crash-safe
 // DiskQueue and takes SDO/NMT requests (../shared/api-contract.md).
 //
-// Delivery: publish() appends to the DiskQueue and returns; while connected
-// an in-flight window (Config::inflight_window) drains the queue in order,
+// Delivery: publish() appends to the DiskQueue (in memory) and returns; a
+// handler it posts (once per io loop turn) writes the turn's messages to
+// the queue's files with one write() and then hands them to Paho. So a
+// message given to publish() is in the kernel (survives kill -9 of the
+// gateway) once the io thread has finished the handlers ready in the same
+// turn, and before it is sent; a kill -9 loses at most the messages
+// published in the current turn. The queue is fdatasync'ed every
+// sync_interval (power loss: at most that much lost); the acknowledged
+// position is written at the same tick (or when a segment file is deleted),
+// so after a crash up to sync_interval of already delivered messages may
+// be sent again. While connected
+// an in-flight window (Config::inflight_window, capped by the broker's MQTT 5
+// Receive Maximum less 4 for status and replies) drains the queue in order,
 // and a message leaves the queue when the broker acknowledges it (PUBACK for
 // QoS 1, written to the socket for QoS 0). On a connection loss everything
 // unacknowledged is sent again, oldest first, after the reconnect; so order
@@ -91,7 +102,9 @@ struct MqttConfig {
   // fdatasync of the queue, on the io thread (it blocks for the sync: on a
   // slow disk choose a longer interval; 0 = never, page cache only).
   std::chrono::milliseconds sync_interval{100};
-  std::size_t inflight_window = 64;
+  // QoS 1 messages in flight; Paho's max inflight is set to match. Under
+  // MQTT 5 the broker's Receive Maximum caps it (mosquitto: 20 by default).
+  std::size_t inflight_window = 256;
   bool accept_requests = true;
 };
 

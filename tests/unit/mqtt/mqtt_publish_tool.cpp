@@ -53,11 +53,16 @@ int main(int argc, char** argv) {
                                       std::chrono::duration_cast<std::chrono::milliseconds>(elapsed).count() * rate / 1000));
     for (; next < due; ++next)
       pub.publish(gateway::mqtt::QueuedMessage{"canopen/" + gw + "/test/seq", std::to_string(next), 1, false});
-    if (next == count && !queued_said) {
+    // "queued" one tick after the last publish: the publisher writes what
+    // it accepted to the queue's files within the io loop turn, not in
+    // publish() itself (MqttPublisher's durability guarantee).
+    static bool all_published = false;
+    if (next == count && all_published && !queued_said) {
       queued_said = true;
       std::printf("queued\n");
       std::fflush(stdout);
     }
+    if (next == count) all_published = true;
     static bool drained_said = false;
     if (next == count && !drained_said && pub.counters().queue_depth == 0 && pub.counters().connected) {
       drained_said = true;
