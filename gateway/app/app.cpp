@@ -503,6 +503,20 @@ std::optional<ApiReply> resolve_type(const canopen::eds::DeviceDescription* desc
   return std::nullopt;
 }
 
+// The same for the gateway's own dictionary.
+std::optional<ApiReply> resolve_own_type(const canopen::od::ObjectDictionary& od, std::uint16_t index, std::uint8_t sub,
+                                         std::optional<canopen::DataType> requested, const ReplyOptions& opts,
+                                         canopen::DataType& out, const canopen::od::SubEntry** entry) {
+  *entry = od.find(index, sub);
+  if (*entry == nullptr) {
+    // As the device would answer (7.2.4.3.17): the object does not exist.
+    const auto code = od.find(index) == nullptr ? canopen::SdoAbort::NoSuchObject : canopen::SdoAbort::NoSuchSubIndex;
+    return sdo_error_reply(make_error_code(code), true, {}, opts);
+  }
+  out = requested.value_or((*entry)->type);
+  return std::nullopt;
+}
+
 }  // namespace
 
 void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
@@ -518,6 +532,29 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
   const auto sub = *params->sub;
   canopen::DataType type{};
   const canopen::od::SubEntry* entry = nullptr;
+  if (req.node == n.cfg.node_id) {
+    // The gateway's own node: its socket does not hear its own SDO request,
+    // so the dictionary answers directly, with the same access rules.
+    if (auto err = resolve_own_type(*n.own_od, index, sub, params->type, opts, type, &entry)) {
+      reply(std::move(*err));
+      return;
+    }
+    ++counters_.sdo_requests;
+    auto bytes = n.own_od->read(index, sub);
+    if (!bytes) {
+      reply(sdo_error_reply(bytes.error().code, true, bytes.error().detail, opts));
+      return;
+    }
+    auto v = canopen::decode(type, *bytes);
+    if (!v) {
+      reply(problem(400, "object " + hex4(index) + " sub " + std::to_string(sub) + " is not a " +
+                             std::string(canopen::cia309_name(type)) + ": " + v.error().detail,
+                    opts));
+      return;
+    }
+    reply(sdo_response(*v, opts));
+    return;
+  }
   if (auto err = resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
     reply(std::move(*err));
     return;
@@ -564,7 +601,9 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   const auto sub = *params->sub;
   canopen::DataType type{};
   const canopen::od::SubEntry* entry = nullptr;
-  if (auto err = resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
+  const bool own = req.node == n.cfg.node_id;
+  if (auto err = own ? resolve_own_type(*n.own_od, index, sub, params->type, opts, type, &entry)
+                     : resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
     reply(std::move(*err));
     return;
   }
@@ -581,15 +620,28 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
       return;
     }
   }
-  canopen::sdo::Request r;
-  r.node = req.node;
-  r.index = index;
-  r.sub = sub;
   ++counters_.sdo_requests;
   const canopen::Value written = *value;
   const std::string audit = "SDO write by " + (req.who.empty() ? std::string("anonymous") : req.who) + ": net " +
                             std::to_string(n.number) + " node " + std::to_string(req.node) + " " + hex4(index) +
                             " sub " + std::to_string(sub) + " = " + canopen::format_value(written);
+  if (own) {
+    // As an SDO download would: access, length and limit checks, hooks and
+    // observers (a write to 1016h reconfigures the heartbeat consumers).
+    if (auto ec = n.own_od->write(index, sub, canopen::encode(written))) {
+      log_.info("audit: " + audit + ": " + ec.message());
+      reply(sdo_error_reply(ec, true, {}, opts));
+      return;
+    }
+    n.driver->poke();
+    log_.info("audit: " + audit + ": ok");
+    reply(sdo_response(written, opts));
+    return;
+  }
+  canopen::sdo::Request r;
+  r.node = req.node;
+  r.index = index;
+  r.sub = sub;
   r.on_done = [this, opts, reply, written, audit](canopen::sdo::TransferResult&& res) {
     if (!res.ok()) {
       if (res.origin == canopen::sdo::Origin::Remote) ++counters_.sdo_aborts;

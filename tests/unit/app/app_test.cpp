@@ -128,6 +128,23 @@ TEST(AppDemo, SdoWriteRoundTrip) {
   EXPECT_EQ(boost::json::parse(r.body).as_object().at("value").to_number<int>(), 3);
 }
 
+TEST(AppDemo, TheGatewaysOwnNodeAnswersFromItsDictionary) {
+  DemoRig rig;
+  auto name = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1008", "subIndex": 0})");
+  ASSERT_EQ(name.status, 200) << name.body;
+  EXPECT_THAT(name.body, HasSubstr("canopen-gateway"));
+  EXPECT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  auto hb = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1017", "subIndex": 0})");
+  EXPECT_THAT(hb.body, HasSubstr("\"value\":250"));
+  // The dictionary's rules hold: read-only 1018h sub 1, an object that does not exist.
+  auto ro = rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1018", "subIndex": 1, "value": 1})");
+  EXPECT_EQ(ro.status, 422);
+  EXPECT_THAT(ro.body, HasSubstr("0x06010002"));
+  auto missing = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x2000", "subIndex": 0})");
+  EXPECT_EQ(missing.status, 422);
+  EXPECT_THAT(missing.body, HasSubstr("0x06020000"));
+}
+
 TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 10); }));
