@@ -1,0 +1,239 @@
+#include "metrics.hpp"
+
+#include <array>
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+#include <system_error>
+
+namespace gateway::metrics {
+
+namespace {
+
+bool name_start(char c, bool colon) {
+  return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || c == '_' || (colon && c == ':');
+}
+bool name_char(char c, bool colon) { return name_start(c, colon) || (c >= '0' && c <= '9'); }
+
+bool valid_name(std::string_view name, bool colon) {
+  if (name.empty() || !name_start(name.front(), colon)) return false;
+  for (char c : name) {
+    if (!name_char(c, colon)) return false;
+  }
+  return true;
+}
+
+template <typename T>
+std::string integer_text(T v) {
+  std::array<char, 24> buf{};
+  auto [end, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), v);
+  (void)ec;  // 24 chars hold any 64-bit integer
+  return std::string(buf.data(), end);
+}
+
+std::string render_labels(const Labels& labels) {
+  if (labels.empty()) return {};
+  std::string out = "{";
+  bool first = true;
+  for (const auto& [k, v] : labels) {
+    if (!valid_label_name(k)) throw std::invalid_argument("metrics: bad label name '" + k + "'");
+    if (!first) out += ',';
+    first = false;
+    out += k;
+    out += "=\"";
+    out += escape_label_value(v);
+    out += '"';
+  }
+  out += '}';
+  return out;
+}
+
+}  // namespace
+
+std::string Value::to_string() const {
+  switch (kind_) {
+    case Kind::Unsigned: return integer_text(u_);
+    case Kind::Signed: return integer_text(i_);
+    case Kind::Double: break;
+  }
+  if (std::isnan(d_)) return "NaN";
+  if (std::isinf(d_)) return d_ > 0 ? "+Inf" : "-Inf";
+  // %.17g, but locale-independent.
+  std::array<char, 40> buf{};
+  auto [end, ec] = std::to_chars(buf.data(), buf.data() + buf.size(), d_, std::chars_format::general, 17);
+  (void)ec;  // 40 chars hold any %.17g
+  return std::string(buf.data(), end);
+}
+
+bool valid_metric_name(std::string_view name) { return valid_name(name, true); }
+
+bool valid_label_name(std::string_view name) {
+  return valid_name(name, false) && name.substr(0, 2) != "__";
+}
+
+std::string escape_label_value(std::string_view v) {
+  std::string out;
+  out.reserve(v.size());
+  for (char c : v) {
+    switch (c) {
+      case '\\': out += "\\\\"; break;
+      case '"': out += "\\\""; break;
+      case '\n': out += "\\n"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string escape_help(std::string_view v) {
+  std::string out;
+  out.reserve(v.size());
+  for (char c : v) {
+    switch (c) {
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+void TextWriter::family(std::string_view name, std::string_view help, MetricType type) {
+  if (!valid_metric_name(name)) throw std::invalid_argument("metrics: bad metric name '" + std::string(name) + "'");
+  for (const auto& f : families_) {
+    if (f.name != name) continue;
+    if (f.type != type || f.help != help) {
+      throw std::invalid_argument("metrics: family '" + std::string(name) + "' declared twice differently");
+    }
+    return;
+  }
+  families_.push_back(Family{std::string(name), std::string(help), type, {}, {}});
+}
+
+TextWriter::Family& TextWriter::find(std::string_view name) {
+  for (auto& f : families_) {
+    if (f.name == name) return f;
+  }
+  throw std::invalid_argument("metrics: sample of undeclared family '" + std::string(name) + "'");
+}
+
+void TextWriter::sample(std::string_view name, const Labels& labels, Value value) {
+  Family& f = find(name);
+  std::string rendered = render_labels(labels);
+  for (const auto& existing : f.label_sets) {
+    if (existing == rendered) {
+      throw std::invalid_argument("metrics: duplicate series " + f.name + rendered);
+    }
+  }
+  std::string line = f.name;
+  line += rendered;
+  line += ' ';
+  line += value.to_string();
+  line += '\n';
+  f.lines.push_back(std::move(line));
+  f.label_sets.push_back(std::move(rendered));
+}
+
+void TextWriter::single(std::string_view name, std::string_view help, MetricType type, Value value) {
+  family(name, help, type);
+  sample(name, {}, value);
+}
+
+std::string TextWriter::str() const {
+  std::string out;
+  for (const auto& f : families_) {
+    out += "# HELP ";
+    out += f.name;
+    out += ' ';
+    out += escape_help(f.help);
+    out += "\n# TYPE ";
+    out += f.name;
+    out += f.type == MetricType::Counter ? " counter\n" : " gauge\n";
+    for (const auto& line : f.lines) out += line;
+  }
+  return out;
+}
+
+std::string render_metrics(const MetricsSnapshot& s) {
+  constexpr auto C = MetricType::Counter;
+  constexpr auto G = MetricType::Gauge;
+  TextWriter w;
+
+  if (!s.version.empty()) {
+    w.family("canopen_gateway_build_info", "Gateway build; the value is always 1.", G);
+    w.sample("canopen_gateway_build_info", {{"version", s.version}}, 1U);
+  }
+
+  // Per CAN network.
+  const std::string frames = "canopen_gateway_can_frames_total";
+  const std::string dropped = "canopen_gateway_can_frames_dropped_total";
+  const std::string errors = "canopen_gateway_can_error_frames_total";
+  const std::string reopens = "canopen_gateway_can_reopens_total";
+  const std::string bus = "canopen_gateway_bus_state";
+  const std::string net_events = "canopen_gateway_network_events_total";
+  w.family(frames, "CAN frames received (rx) and sent (tx) per network.", C);
+  w.family(dropped, "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.", C);
+  w.family(errors, "CAN error frames received per network.", C);
+  w.family(reopens, "Times the CAN socket of a network was reopened after the link came back.", C);
+  w.family(bus, "CAN controller state per network: 1 for the current state, 0 for the others.", G);
+  w.family(net_events, "Events produced by each network.", C);
+  for (const auto& n : s.networks) {
+    const std::string id = integer_text(n.network);
+    auto labels = [&](std::string_view k, std::string_view v) {
+      Labels l{{"network", id}, {"interface", n.interface}};
+      if (!k.empty()) l.emplace_back(std::string(k), std::string(v));
+      return l;
+    };
+    w.sample(frames, labels("direction", "rx"), n.rx_frames);
+    w.sample(frames, labels("direction", "tx"), n.tx_frames);
+    w.sample(dropped, labels("direction", "rx"), n.rx_dropped);
+    w.sample(dropped, labels("direction", "tx"), n.tx_dropped);
+    w.sample(errors, labels({}, {}), n.error_frames);
+    w.sample(reopens, labels({}, {}), n.reopens);
+    for (std::string_view state : kBusStates) {
+      w.sample(bus, labels("state", state), n.bus_state == state);
+    }
+    w.sample(net_events, labels({}, {}), n.events);
+  }
+
+  // CANopen services.
+  w.single("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", C, s.sdo_requests);
+  w.single("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", C, s.sdo_aborts);
+  w.single("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", C, s.sdo_timeouts);
+  w.single("canopen_gateway_nmt_commands_total", "NMT commands sent.", C, s.nmt_commands);
+
+  const std::string events = "canopen_gateway_events_published_total";
+  w.family(events, "Events published to clients, by kind.", C);
+  for (const auto& [kind, n] : s.events_by_kind) w.sample(events, {{"kind", kind}}, n);
+
+  // MQTT.
+  w.single("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", G, s.mqtt_enabled);
+  if (s.mqtt_enabled) {
+    w.single("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", G, s.mqtt_connected);
+    const std::string msgs = "canopen_gateway_mqtt_messages_total";
+    w.family(msgs, "MQTT messages by result: published (handed to the broker), acked, dropped.", C);
+    w.sample(msgs, {{"result", "published"}}, s.mqtt_published);
+    w.sample(msgs, {{"result", "acked"}}, s.mqtt_acked);
+    w.sample(msgs, {{"result", "dropped"}}, s.mqtt_dropped);
+    w.single("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", G, s.mqtt_queue_depth);
+    w.single("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", G,
+             s.mqtt_queue_bytes);
+    w.single("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", C, s.mqtt_reconnects);
+  }
+
+  // WebSocket and HTTP.
+  w.single("canopen_gateway_websocket_clients", "Connected WebSocket clients.", G, s.ws_clients);
+  const std::string ws = "canopen_gateway_websocket_messages_total";
+  w.family(ws, "WebSocket messages by result: sent, or dropped for a slow client.", C);
+  w.sample(ws, {{"result", "sent"}}, s.ws_messages_sent);
+  w.sample(ws, {{"result", "dropped"}}, s.ws_messages_dropped);
+
+  const std::string http = "canopen_gateway_http_responses_total";
+  w.family(http, "HTTP responses by status code.", C);
+  for (const auto& [code, n] : s.http_responses_by_status) w.sample(http, {{"code", integer_text(code)}}, n);
+
+  w.single("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", G, s.uptime_seconds);
+  return w.str();
+}
+
+}  // namespace gateway::metrics

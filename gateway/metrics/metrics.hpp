@@ -1,0 +1,118 @@
+// Prometheus text exposition (format 0.0.4) for GET /metrics: a small,
+// dependency-free writer and the gateway's metric families rendered from a
+// plain snapshot. The caller fills MetricsSnapshot from the live parts
+// (channels, SDO client, MQTT publisher, WebSocket hub, HTTP server) and
+// serves render_metrics() with kContentType.
+//
+// Pure data and functions; thread-safe (no shared state).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace gateway::metrics {
+
+inline constexpr std::string_view kContentType = "text/plain; version=0.0.4; charset=utf-8";
+
+enum class MetricType : std::uint8_t { Counter, Gauge };
+
+// Label name/value pairs, written in the order given.
+using Labels = std::vector<std::pair<std::string, std::string>>;
+
+// A sample value: integers are printed exactly, doubles like %.17g
+// (NaN, +Inf, -Inf spelled as Prometheus expects).
+// Implicit from the integer and floating types so call sites pass counters as is.
+class Value {
+ public:
+  Value(std::uint64_t v) : kind_(Kind::Unsigned), u_(v) {}
+  Value(std::int64_t v) : kind_(Kind::Signed), i_(v) {}
+  Value(double v) : kind_(Kind::Double), d_(v) {}
+  Value(std::uint32_t v) : Value(std::uint64_t{v}) {}
+  Value(int v) : Value(std::int64_t{v}) {}
+  Value(bool v) : Value(std::uint64_t{v ? 1U : 0U}) {}
+  std::string to_string() const;
+
+ private:
+  enum class Kind : std::uint8_t { Unsigned, Signed, Double };
+  Kind kind_;
+  std::uint64_t u_ = 0;
+  std::int64_t i_ = 0;
+  double d_ = 0.0;
+};
+
+// Collects metric families and writes them in the order first declared,
+// each family once (HELP, TYPE, then all its samples) however its samples
+// were interleaved with others'. Misuse is a programming error and throws
+// std::invalid_argument: a bad metric or label name, a family declared
+// again with another type or help, a sample of an undeclared family, or a
+// series (family + labels) added twice.
+class TextWriter {
+ public:
+  // Declares a family; declaring it again with the same type and help is a
+  // no-op. A family with no samples is still written (HELP and TYPE only).
+  void family(std::string_view name, std::string_view help, MetricType type);
+  void sample(std::string_view name, const Labels& labels, Value value);
+  // family() + sample() for a one-series family without labels.
+  void single(std::string_view name, std::string_view help, MetricType type, Value value);
+
+  std::string str() const;
+
+ private:
+  struct Family {
+    std::string name, help;
+    MetricType type;
+    std::vector<std::string> label_sets;  // rendered "{...}" or "", for duplicate checks
+    std::vector<std::string> lines;
+  };
+  Family& find(std::string_view name);
+  std::vector<Family> families_;
+};
+
+bool valid_metric_name(std::string_view name);  // [a-zA-Z_:][a-zA-Z0-9_:]*
+bool valid_label_name(std::string_view name);   // [a-zA-Z_][a-zA-Z0-9_]*, not "__..."
+std::string escape_label_value(std::string_view v);  // \ -> \\, " -> \", newline -> \n
+std::string escape_help(std::string_view v);         // \ -> \\, newline -> \n
+
+// ---- The gateway's metrics -------------------------------------------------
+
+// Bus state names as canopen::can::to_string(BusState) spells them; the
+// bus_state family has one series per name.
+inline constexpr std::string_view kBusStates[] = {"error-active", "error-warning", "error-passive",
+                                                  "bus-off", "down"};
+
+struct NetworkMetrics {
+  std::uint32_t network = 0;   // label network="<id>"
+  std::string interface;       // label interface="can0"
+  std::string bus_state;       // one of kBusStates; anything else gives all-zero bus_state series
+  std::uint64_t rx_frames = 0, tx_frames = 0;
+  std::uint64_t rx_dropped = 0, tx_dropped = 0;
+  std::uint64_t error_frames = 0;
+  std::uint64_t reopens = 0;   // socket (re)opens after link loss
+  std::uint64_t events = 0;    // events produced by this network
+};
+
+struct MetricsSnapshot {
+  std::string version;  // build_info version label; empty = no build_info family
+  std::vector<NetworkMetrics> networks;
+  std::uint64_t sdo_requests = 0, sdo_aborts = 0, sdo_timeouts = 0;
+  std::uint64_t nmt_commands = 0;
+  std::map<std::string, std::uint64_t> events_by_kind;  // "tpdo" -> n
+  bool mqtt_enabled = false;  // false: only canopen_gateway_mqtt_enabled 0 is written
+  bool mqtt_connected = false;
+  std::uint64_t mqtt_published = 0, mqtt_acked = 0, mqtt_dropped = 0;
+  std::uint64_t mqtt_queue_depth = 0, mqtt_queue_bytes = 0;
+  std::uint64_t mqtt_reconnects = 0;
+  std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
+  std::map<int, std::uint64_t> http_responses_by_status;  // 200 -> n
+  double uptime_seconds = 0.0;
+};
+
+// The whole /metrics body. Family order is fixed; series within a family
+// follow the snapshot's order (networks) or key order (maps).
+std::string render_metrics(const MetricsSnapshot& s);
+
+}  // namespace gateway::metrics
