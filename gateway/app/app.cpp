@@ -290,6 +290,65 @@ const canopen::eds::DeviceDescription* App::description(std::uint32_t net_number
   return it == d.end() ? nullptr : &it->second;
 }
 
+std::string_view App::version() { return CANOPEN_GATEWAY_VERSION; }
+
+std::optional<canopen::can::BusState> App::bus_state(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
+  return nets_[net_number - 1]->channel->state();
+}
+
+std::error_code App::write_rpdo(std::uint32_t net_number, std::uint8_t node, std::uint16_t number,
+                                std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
+                                canopen::Bytes* sent) {
+  Net* n = net(net_number);
+  if (n == nullptr) return make_error_code(canopen::SdoAbort::NoSuchObject);
+  auto& tx = n->network->rpdo();
+  const auto now = canopen::SteadyClock::now();
+  const auto ec = raw != nullptr ? tx.set_raw(node, number, *raw, now) : tx.set_values(node, number, values, now);
+  if (ec) return ec;
+  n->driver->poke();
+  if (sent != nullptr) {
+    if (const auto* p = tx.payload(node, number)) *sent = *p;
+  }
+  return {};
+}
+
+bool App::send_sync(std::uint32_t net_number, std::optional<std::uint8_t> counter) {
+  Net* n = net(net_number);
+  if (n == nullptr) return false;
+  const Frame f =
+      counter ? Frame::standard(0x080, {*counter}) : Frame::standard(0x080, std::span<const std::uint8_t>{});
+  n->channel->send(f);
+  if (n->driver) n->driver->deliver_locally(f, n->network.get());
+  return true;
+}
+
+bool App::set_simulated_link(std::uint32_t net_number, bool up) {
+  Net* n = net(net_number);
+  if (n == nullptr || !n->memory_gateway) return false;
+  n->memory_gateway->set_link_up(up);
+  return true;
+}
+
+std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
+  return nets_[net_number - 1]->channel->stats();
+}
+
+std::optional<App::MqttCounters> App::mqtt_counters() const {
+  if (!mqtt_ || !mqtt_->publisher) return std::nullopt;
+  const auto c = mqtt_->publisher->counters();
+  MqttCounters out;
+  out.connected = c.connected;
+  out.published = c.published;
+  out.acked = c.acked;
+  out.dropped = c.dropped;
+  out.queue_depth = c.queue_depth;
+  out.queue_bytes = c.queue_bytes;
+  out.reconnects = c.reconnects;
+  return out;
+}
+
 void App::start() {
   if (config_.mqtt.enabled) start_mqtt();
   for (auto& n : nets_) {

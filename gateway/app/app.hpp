@@ -14,12 +14,16 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <vector>
 
 #include <boost/asio/io_context.hpp>
 
 #include "canopen/can/bus_state.hpp"
+#include "canopen/can/channel.hpp"
 #include "config.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
@@ -67,6 +71,36 @@ class App {
   // The node's EDS/DCF on network `net`, if configured.
   const canopen::eds::DeviceDescription* description(std::uint32_t net, std::uint8_t node) const;
   std::chrono::steady_clock::time_point started_at() const { return started_at_; }
+  // The gateway's version (CANOPEN_GATEWAY_VERSION).
+  static std::string_view version();
+
+  // The bus state of network `net` as its channel reports it now; nullopt
+  // for an unknown network.
+  std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const;
+  // Frame counters of network `net`'s channel (for /metrics).
+  std::optional<canopen::can::ChannelStats> channel_stats(std::uint32_t net) const;
+  // The MQTT publisher's counters; nullopt when MQTT is off.
+  struct MqttCounters {
+    bool connected = false;
+    std::uint64_t published = 0, acked = 0, dropped = 0, queue_depth = 0, queue_bytes = 0, reconnects = 0;
+  };
+  std::optional<MqttCounters> mqtt_counters() const;
+  // Process data to `node`'s RPDO `number` (COB-ID and mapping from its
+  // EDS/DCF): either values (typed as mapped) or raw bytes (exactly the
+  // mapped length). Errors as PdoTransmitter::set_values/set_raw
+  // (NoSuchObject: no such network, node or RPDO). On success `sent`
+  // (optional) gets the PDO's payload after the write.
+  std::error_code write_rpdo(std::uint32_t net, std::uint8_t node, std::uint16_t number,
+                             std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
+                             canopen::Bytes* sent = nullptr);
+  // Sends one SYNC (with the counter when given) on network `net` and
+  // delivers it to the gateway's own services (synchronous RPDOs). False
+  // for an unknown network.
+  bool send_sync(std::uint32_t net, std::optional<std::uint8_t> counter);
+  // A simulated network only: takes the gateway's side of the in-process
+  // bus down or up, as an interface going down would (demos, tests). False
+  // for an unknown or real network.
+  bool set_simulated_link(std::uint32_t net, bool up);
 
   struct Counters {
     std::uint64_t sdo_requests = 0;

@@ -75,6 +75,17 @@ wait_for "$T/replies.log" '^reply/nmt ' 10
 wait_for "$T/mqtt.log" "^canopen/$GW/1/5/state .*\"stopped\"" 10
 pass "NMT stop over MQTT: node 5 stopped"
 
+# The same gateway over REST and /metrics (issue 6 builds on these).
+http_get() { /usr/bin/python3 -c 'import sys, urllib.request; print(urllib.request.urlopen(sys.argv[1], timeout=10).read().decode())' "$1"; }
+# Node 10: node 5 is stopped, and a stopped node has no SDO (7.3.2.2.5).
+http_get http://127.0.0.1:8080/api/v1/networks/1/nodes/10/sdo/1018/1 > "$T/rest.out" 2>&1 || fail "REST SDO read: $(cat "$T/rest.out")"
+grep -q '"value"' "$T/rest.out" || fail "REST SDO read: $(cat "$T/rest.out")"
+http_get http://127.0.0.1:8080/metrics > "$T/metrics.out" 2>&1 || fail "/metrics: $(cat "$T/metrics.out")"
+grep -qE '^canopen_gateway_can_frames_total\{network="1",interface="vcan0",direction="rx"\} [1-9]' "$T/metrics.out" ||
+  fail "/metrics has no received frames: $(head -20 "$T/metrics.out")"
+grep -qE '^canopen_gateway_mqtt_connected 1' "$T/metrics.out" || fail "/metrics: MQTT not connected"
+pass "REST SDO read and /metrics: $(cat "$T/rest.out")"
+
 kill -KILL "$SIM_PID"
 wait "$SIM_PID" 2>/dev/null || true
 wait_for "$T/mqtt.log" "^canopen/$GW/1/5/state .*\"lost\"" 10

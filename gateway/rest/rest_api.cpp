@@ -1,0 +1,586 @@
+#include "rest_api.hpp"
+
+#include <boost/json/object.hpp>
+#include <boost/json/array.hpp>
+#include <boost/json/parse.hpp>
+#include <boost/json/serialize.hpp>
+#include <charconv>
+#include <cstdio>
+
+#include "canopen/eds/eds.hpp"
+#include "canopen/json_value.hpp"
+#include "canopen/pdo/mapping.hpp"
+#include "canopen/sdo/abort.hpp"
+#include "canopen_gateway.pb.h"
+#include "google/protobuf/util/json_util.h"
+#include "json_text.hpp"
+#include "request_codec.hpp"
+
+namespace gateway {
+
+namespace {
+
+namespace json = boost::json;
+using http::Request;
+using http::Responder;
+using http::Response;
+
+constexpr std::string_view kProtobuf = "application/x-protobuf";
+
+bool contains(std::optional<std::string_view> header, std::string_view what) {
+  return header && header->find(what) != std::string_view::npos;
+}
+bool accepts_protobuf(const Request& r) { return contains(r.header("accept"), kProtobuf); }
+bool sends_protobuf(const Request& r) { return contains(r.header("content-type"), kProtobuf); }
+
+Response from_reply(ApiReply reply) {
+  Response r;
+  r.status = reply.status;
+  r.content_type = std::move(reply.content_type);
+  r.body = std::move(reply.body);
+  return r;
+}
+
+Response problem_response(int status, std::string_view detail, bool protobuf = false) {
+  ReplyOptions opts;
+  opts.protobuf = protobuf;
+  return from_reply(problem(status, detail, opts));
+}
+
+Response json_response(const json::value& v, int status = 200) { return Response::json(json::serialize(v), status); }
+
+std::optional<std::uint32_t> parse_decimal(std::string_view s) {
+  std::uint32_t v = 0;
+  if (s.empty() || s.size() > 9) return std::nullopt;
+  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (ec != std::errc{} || p != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+std::string hex_text(std::span<const std::uint8_t> bytes) { return detail::to_hex(bytes); }
+
+std::string timestamp_text(WallTime t) {
+  std::string out;
+  detail::append_timestamp(out, detail::to_unix_time(t));
+  if (out.size() >= 2 && out.front() == '"') out = out.substr(1, out.size() - 2);
+  return out;
+}
+
+std::string index_hex(std::uint16_t index) {
+  char b[8];
+  std::snprintf(b, sizeof b, "%04X", static_cast<unsigned>(index));
+  return b;
+}
+
+// Network and node from the path: nullopt when fine, else the error response.
+std::optional<Response> check_net(const App& app, const Request& req, std::uint32_t& net, bool protobuf = false) {
+  auto n = parse_decimal(req.param("net"));
+  if (!n) return problem_response(400, "network must be a decimal number, not '" + std::string(req.param("net")) + "'", protobuf);
+  if (*n == 0 || *n > app.config().networks.size())
+    return problem_response(404,
+                            "network " + std::to_string(*n) + " is not configured (networks are 1.." +
+                                std::to_string(app.config().networks.size()) + ")",
+                            protobuf);
+  net = *n;
+  return std::nullopt;
+}
+
+std::optional<Response> check_node(const Request& req, std::uint8_t& node, bool allow_zero, bool protobuf = false) {
+  auto n = parse_decimal(req.param("node"));
+  if (!n || *n > 127 || (*n == 0 && !allow_zero))
+    return problem_response(400,
+                            "node-ID must be " + std::string(allow_zero ? "0..127" : "1..127") + ", not '" +
+                                std::string(req.param("node")) + "'",
+                            protobuf);
+  node = static_cast<std::uint8_t>(*n);
+  return std::nullopt;
+}
+
+std::optional<Response> check_bus(const App& app, std::uint32_t net, bool protobuf = false) {
+  const auto state = app.bus_state(net);
+  if (state && (*state == canopen::can::BusState::BusOff || *state == canopen::can::BusState::Down))
+    return problem_response(503, "network " + std::to_string(net) + " is " + std::string(canopen::can::to_string(*state)),
+                            protobuf);
+  return std::nullopt;
+}
+
+std::string state_name(const NodeInfo& n) {
+  if (n.lost) return "lost";
+  if (!n.state) return "unknown";
+  return std::string(canopen::to_string(*n.state));
+}
+
+json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, WallTime now) {
+  json::object o;
+  o["node"] = n.id;
+  o["name"] = n.name;
+  o["configured"] = n.configured;
+  o["state"] = state_name(n);
+  if (n.last_heartbeat) {
+    o["lastHeartbeatAgeMs"] =
+        std::chrono::duration_cast<std::chrono::milliseconds>(now - *n.last_heartbeat).count();
+  } else {
+    o["lastHeartbeatAgeMs"] = nullptr;
+  }
+  if (n.last_seen) o["lastSeen"] = timestamp_text(*n.last_seen);
+  o["bootCount"] = n.boot_count;
+  if (n.identity) {
+    json::object id;
+    id["deviceType"] = n.identity->device_type;
+    id["vendorId"] = n.identity->vendor_id;
+    id["productCode"] = n.identity->product_code;
+    id["revision"] = n.identity->revision;
+    id["serial"] = n.identity->serial;
+    o["identity"] = std::move(id);
+  } else {
+    o["identity"] = nullptr;
+  }
+  o["emcyCount"] = n.emcy_count;
+  o["eds"] = app.description(net, n.id) != nullptr;
+  return o;
+}
+
+json::value limit_json(const std::optional<canopen::Value>& v) {
+  if (!v) return nullptr;
+  return canopen::value_to_json(*v);
+}
+
+// ---- routes ------------------------------------------------------------------
+
+void get_gateway(App& app, const Request&, Responder respond) {
+  json::object o;
+  o["version"] = std::string(App::version());
+  o["gatewayId"] = app.config().gateway_id;
+  o["uptimeSeconds"] =
+      std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - app.started_at()).count();
+  const auto& nets = app.config().networks;
+  o["nodeId"] = nets.empty() ? 127 : nets.front().node_id;
+  json::array list;
+  for (std::size_t i = 0; i < nets.size(); ++i) {
+    const auto number = static_cast<std::uint32_t>(i + 1);
+    json::object n;
+    n["network"] = number;
+    n["interface"] = nets[i].simulated ? std::string("demo") : nets[i].interface;
+    n["simulated"] = nets[i].simulated;
+    n["nodeId"] = nets[i].node_id;
+    if (auto s = app.bus_state(number)) n["bus"] = std::string(canopen::can::to_string(*s));
+    list.push_back(std::move(n));
+  }
+  o["networks"] = std::move(list);
+  json::object c;
+  c["sdoRequests"] = app.counters().sdo_requests;
+  c["sdoAborts"] = app.counters().sdo_aborts;
+  c["sdoTimeouts"] = app.counters().sdo_timeouts;
+  c["nmtCommands"] = app.counters().nmt_commands;
+  o["counters"] = std::move(c);
+  respond(json_response(o));
+}
+
+void get_network(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  const auto& cfg = app.config().networks[net - 1];
+  json::object o;
+  o["network"] = net;
+  o["interface"] = cfg.simulated ? std::string("demo") : cfg.interface;
+  o["simulated"] = cfg.simulated;
+  o["nodeId"] = cfg.node_id;
+  if (cfg.bitrate != 0) o["bitrate"] = cfg.bitrate;
+  if (auto s = app.bus_state(net)) o["bus"] = std::string(canopen::can::to_string(*s));
+  const auto* info = app.cache().network(net);
+  json::object counters;
+  if (info != nullptr) {
+    counters["events"] = info->events;
+    counters["lastSeq"] = info->last_seq;
+    counters["syncCount"] = info->sync_count;
+    if (info->last_sync_counter) counters["lastSyncCounter"] = *info->last_sync_counter;
+    counters["nodes"] = info->nodes.size();
+    if (info->last_bus_event) {
+      json::object b;
+      b["state"] = std::string(canopen::can::to_string(info->last_bus_event->state));
+      b["previous"] = std::string(canopen::can::to_string(info->last_bus_event->previous));
+      b["cause"] = std::string(canopen::can::to_string(info->last_bus_event->cause));
+      b["txErrorCounter"] = info->last_bus_event->tx_error_counter;
+      b["rxErrorCounter"] = info->last_bus_event->rx_error_counter;
+      b["dropped"] = info->last_bus_event->dropped;
+      o["lastBusEvent"] = std::move(b);
+    }
+  }
+  o["counters"] = std::move(counters);
+  json::object sync;
+  sync["producer"] = cfg.sync.period.count() > 0;
+  sync["periodUs"] = cfg.sync.period.count();
+  sync["windowUs"] = cfg.sync.window.count();
+  sync["counterOverflow"] = cfg.sync.counter_overflow;
+  o["sync"] = std::move(sync);
+  json::object time;
+  time["producer"] = cfg.time.produce;
+  time["periodMs"] = cfg.time.period.count();
+  o["time"] = std::move(time);
+  o["heartbeatMs"] = cfg.heartbeat_producer.count();
+  respond(json_response(o));
+}
+
+void get_nodes(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  json::array list;
+  const auto now = WallTime::clock::now();
+  if (const auto* info = app.cache().network(net)) {
+    for (const auto& [id, n] : info->nodes) list.push_back(node_summary(app, net, n, now));
+  }
+  json::object o;
+  o["network"] = net;
+  o["nodes"] = std::move(list);
+  respond(json_response(o));
+}
+
+void get_node(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  const auto* n = app.cache().node(net, node);
+  if (n == nullptr) {
+    return respond(problem_response(404, "node " + std::to_string(node) + " is neither configured nor heard on network " +
+                                             std::to_string(net)));
+  }
+  auto o = node_summary(app, net, *n, WallTime::clock::now());
+  o["network"] = net;
+  json::array values;
+  for (const auto& [key, v] : n->values) {
+    json::object e;
+    e["index"] = key.first;
+    e["subIndex"] = key.second;
+    e["name"] = v.name;
+    e["type"] = std::string(canopen::cia309_name(v.value.type));
+    e["value"] = canopen::value_to_json(v.value);
+    e["timestamp"] = timestamp_text(v.timestamp);
+    e["tpdo"] = v.tpdo;
+    values.push_back(std::move(e));
+  }
+  o["values"] = std::move(values);
+  json::array tpdos;
+  for (const auto& [number, raw] : n->tpdo_raw) {
+    json::object t;
+    t["tpdo"] = number;
+    t["raw"] = hex_text(raw);
+    tpdos.push_back(std::move(t));
+  }
+  o["tpdos"] = std::move(tpdos);
+  respond(json_response(o));
+}
+
+void get_od(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  const auto* desc = app.description(net, node);
+  if (desc == nullptr)
+    return respond(problem_response(404, "node " + std::to_string(node) + " on network " + std::to_string(net) +
+                                             " has no EDS/DCF configured"));
+  json::object o;
+  o["network"] = net;
+  o["node"] = node;
+  o["vendorName"] = desc->device.vendor_name;
+  o["productName"] = desc->device.product_name;
+  o["dcf"] = desc->is_dcf;
+  json::array objects;
+  for (const auto& [index, obj] : desc->od.objects()) {
+    json::object jo;
+    jo["index"] = index;
+    jo["indexHex"] = index_hex(index);
+    jo["name"] = obj.name;
+    jo["objectCode"] = std::string(canopen::od::to_string(obj.code));
+    json::array subs;
+    for (const auto& [sub, e] : obj.subs) {
+      json::object js;
+      js["subIndex"] = sub;
+      js["name"] = e.name;
+      js["type"] = std::string(canopen::cia309_name(e.type));
+      js["access"] = std::string(canopen::od::to_string(e.access));
+      js["pdoMappable"] = e.pdo_mappable;
+      js["default"] = limit_json(e.default_value);
+      js["low"] = limit_json(e.low);
+      js["high"] = limit_json(e.high);
+      subs.push_back(std::move(js));
+    }
+    jo["subs"] = std::move(subs);
+    objects.push_back(std::move(jo));
+  }
+  o["objects"] = std::move(objects);
+  respond(json_response(o));
+}
+
+void get_emcy(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  json::array list;
+  std::uint64_t count = 0;
+  if (const auto* n = app.cache().node(net, node)) {
+    count = n->emcy_count;
+    for (const auto& e : n->emcys) {
+      json::object j;
+      j["seq"] = e.seq;
+      j["timestamp"] = timestamp_text(e.timestamp);
+      j["errorCode"] = e.emcy.error_code;
+      j["errorRegister"] = e.emcy.error_register;
+      j["manufacturerData"] = hex_text(e.emcy.manufacturer);
+      j["description"] = e.emcy.description;
+      list.push_back(std::move(j));
+    }
+  }
+  json::object o;
+  o["network"] = net;
+  o["node"] = node;
+  o["emcyCount"] = count;
+  o["emcy"] = std::move(list);
+  respond(json_response(o));
+}
+
+// SDO read/write: the path's index/sub (and ?type=) go into the body App understands.
+void sdo(App& app, bool write, const Request& req, Responder respond) {
+  const bool reply_proto = accepts_protobuf(req) || sends_protobuf(req);
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net, reply_proto)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false, reply_proto)) return respond(std::move(*err));
+  const auto index = parse_index_text(req.param("index"));
+  if (!index)
+    return respond(problem_response(400, "object index must be hex (1017, 0x1017 or 1017h), not '" +
+                                             std::string(req.param("index")) + "'", reply_proto));
+  const auto sub = parse_sub_index_text(req.param("sub"));
+  if (!sub)
+    return respond(problem_response(400, "sub-index must be 0..255 (decimal or 0x hex), not '" +
+                                             std::string(req.param("sub")) + "'", reply_proto));
+  std::string type;
+  if (auto t = req.query_param("type")) {
+    if (!canopen::parse_type_name(*t))
+      return respond(problem_response(400, "unknown type '" + std::string(*t) + "'", reply_proto));
+    type = std::string(*t);
+  }
+  if (auto err = check_bus(app, net, reply_proto)) return respond(std::move(*err));
+
+  ApiRequest api;
+  api.kind = write ? RequestKind::SdoWrite : RequestKind::SdoRead;
+  api.network = net;
+  api.node = node;
+  api.protobuf = reply_proto;
+  if (!write) {
+    if (reply_proto) {
+      canopen::gateway::v1::SdoReadRequest m;
+      m.set_index(*index);
+      m.set_sub_index(*sub);
+      m.set_type(type);
+      api.body = m.SerializeAsString();
+    } else {
+      json::object o;
+      o["index"] = *index;
+      o["subIndex"] = *sub;
+      if (!type.empty()) o["type"] = type;
+      api.body = json::serialize(o);
+    }
+  } else if (sends_protobuf(req)) {
+    canopen::gateway::v1::SdoWriteRequest m;
+    if (!m.ParseFromString(req.body))
+      return respond(problem_response(400, "the body is not a protobuf SdoWriteRequest", true));
+    m.set_index(*index);
+    m.set_sub_index(*sub);
+    if (!type.empty()) m.set_type(type);
+    api.body = m.SerializeAsString();
+  } else {
+    boost::system::error_code ec;
+    auto body = json::parse(req.body, ec);
+    if (ec || !body.is_object())
+      return respond(problem_response(400, "the body must be a JSON object {\"value\": ..., \"type\": ...}", reply_proto));
+    auto& o = body.as_object();
+    for (const char* k : {"index", "subIndex", "sub_index"}) o.erase(k);
+    o["index"] = *index;
+    o["subIndex"] = *sub;
+    if (!type.empty()) o["type"] = type;
+    if (reply_proto) {
+      canopen::gateway::v1::SdoWriteRequest m;
+      if (!google::protobuf::util::JsonStringToMessage(json::serialize(o), &m).ok())
+        return respond(problem_response(400, "the body is not an SDO write request {\"value\": ..., \"type\": ...}",
+                                        true));
+      api.body = m.SerializeAsString();
+    } else {
+      api.body = json::serialize(o);
+    }
+  }
+  app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
+}
+
+void nmt(App& app, const Request& req, Responder respond) {
+  const bool proto = sends_protobuf(req);
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net, proto)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, true, proto)) return respond(std::move(*err));
+  if (auto err = check_bus(app, net, proto)) return respond(std::move(*err));
+  ApiRequest api;
+  api.kind = RequestKind::Nmt;
+  api.network = net;
+  api.node = node;
+  api.protobuf = proto;
+  api.body = req.body;
+  app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
+}
+
+std::optional<std::uint16_t> json_index(const json::value& v) {
+  if (v.is_int64() && v.as_int64() >= 0 && v.as_int64() <= 0xFFFF) return static_cast<std::uint16_t>(v.as_int64());
+  if (v.is_uint64() && v.as_uint64() <= 0xFFFF) return static_cast<std::uint16_t>(v.as_uint64());
+  if (v.is_string()) return parse_index_text(v.as_string());
+  return std::nullopt;
+}
+
+std::optional<std::uint8_t> json_sub(const json::value& v) {
+  if (v.is_int64() && v.as_int64() >= 0 && v.as_int64() <= 0xFF) return static_cast<std::uint8_t>(v.as_int64());
+  if (v.is_uint64() && v.as_uint64() <= 0xFF) return static_cast<std::uint8_t>(v.as_uint64());
+  if (v.is_string()) return parse_sub_index_text(v.as_string());
+  return std::nullopt;
+}
+
+std::optional<canopen::Bytes> parse_hex(std::string_view s) {
+  canopen::Bytes out;
+  int nibble = -1;
+  for (char c : s) {
+    int d = -1;
+    if (c >= '0' && c <= '9') d = c - '0';
+    else if (c >= 'a' && c <= 'f') d = c - 'a' + 10;
+    else if (c >= 'A' && c <= 'F') d = c - 'A' + 10;
+    else if (c == ' ') continue;
+    else return std::nullopt;
+    if (nibble < 0) {
+      nibble = d;
+    } else {
+      out.push_back(static_cast<std::uint8_t>(nibble << 4 | d));
+      nibble = -1;
+    }
+  }
+  if (nibble >= 0) return std::nullopt;
+  return out;
+}
+
+void rpdo(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  const auto number = parse_decimal(req.param("n"));
+  if (!number || *number == 0 || *number > 512)
+    return respond(problem_response(400, "RPDO number must be 1..512, not '" + std::string(req.param("n")) + "'"));
+  const auto* desc = app.description(net, node);
+  const std::string what = "node " + std::to_string(node) + " RPDO" + std::to_string(*number);
+  if (desc == nullptr)
+    return respond(problem_response(404, "node " + std::to_string(node) + " has no EDS/DCF, so its RPDOs are unknown"));
+  auto cfg = canopen::pdo::read_pdo(desc->od, canopen::pdo::Direction::Receive, static_cast<std::uint16_t>(*number));
+  if (!cfg || !cfg->comm.cob_id.valid())
+    return respond(problem_response(404, "the node's EDS/DCF has no usable " + what));
+
+  boost::system::error_code ec;
+  auto body = json::parse(req.body, ec);
+  if (ec || !body.is_object())
+    return respond(problem_response(400, "the body must be a JSON object {\"values\": [...]} or {\"raw\": \"hex\"}"));
+  const auto& o = body.as_object();
+  std::vector<canopen::MappedValue> values;
+  std::optional<canopen::Bytes> raw;
+  if (const auto* r = o.if_contains("raw")) {
+    if (!r->is_string()) return respond(problem_response(400, "\"raw\" must be a hex string"));
+    raw = parse_hex(r->as_string());
+    if (!raw) return respond(problem_response(400, "\"raw\" is not hex: '" + std::string(r->as_string()) + "'"));
+    if (raw->size() != cfg->byte_length())
+      return respond(problem_response(400, what + " carries " + std::to_string(cfg->byte_length()) + " bytes, not " +
+                                               std::to_string(raw->size())));
+  } else if (const auto* vs = o.if_contains("values"); vs != nullptr && vs->is_array() && !vs->as_array().empty()) {
+    for (const auto& item : vs->as_array()) {
+      const auto* it = item.if_object();
+      if (it == nullptr || !it->contains("index") || !it->contains("value"))
+        return respond(problem_response(400, "each of \"values\" must be {\"index\", \"subIndex\", \"value\"}"));
+      const auto index = json_index(it->at("index"));
+      const auto* sv = it->if_contains("subIndex");
+      const auto sub = sv != nullptr ? json_sub(*sv) : std::optional<std::uint8_t>{0};
+      if (!index || !sub) return respond(problem_response(400, "malformed index or subIndex in \"values\""));
+      const canopen::pdo::MappingEntry* entry = nullptr;
+      for (const auto& e : cfg->entries)
+        if (!e.dummy && e.index == *index && e.sub == *sub) entry = &e;
+      char obj[32];
+      std::snprintf(obj, sizeof obj, "%04Xh sub %u", static_cast<unsigned>(*index), static_cast<unsigned>(*sub));
+      if (entry == nullptr) return respond(problem_response(400, what + " does not map " + obj));
+      auto v = canopen::value_from_json(entry->type, it->at("value"));
+      if (!v) return respond(problem_response(400, std::string(obj) + ": " + v.error().detail));
+      if (const auto* se = desc->od.find(*index, *sub)) {
+        std::string detail;
+        if (canopen::check_limits(*v, se->low, se->high, &detail))
+          return respond(problem_response(400, "value out of range for " + std::string(obj) + ": " + detail));
+      }
+      values.push_back(canopen::MappedValue{*index, *sub, entry->name, std::move(*v)});
+    }
+  } else {
+    return respond(problem_response(400, "the body needs \"values\" (a non-empty array) or \"raw\""));
+  }
+  if (auto err = check_bus(app, net)) return respond(std::move(*err));
+  canopen::Bytes sent;
+  if (auto wec = app.write_rpdo(net, node, static_cast<std::uint16_t>(*number), values, raw ? &*raw : nullptr, &sent)) {
+    const int status = wec == make_error_code(canopen::SdoAbort::NoSuchObject) ? 404 : 400;
+    return respond(problem_response(status, what + ": " + wec.message()));
+  }
+  json::object out;
+  out["network"] = net;
+  out["node"] = node;
+  out["rpdo"] = *number;
+  out["cobId"] = cfg->comm.cob_id.can_id();
+  out["transmissionType"] = cfg->comm.transmission_type;
+  out["raw"] = hex_text(sent);
+  respond(json_response(out));
+}
+
+void sync(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  std::optional<std::uint8_t> counter;
+  if (req.body.find_first_not_of(" \t\r\n") != std::string::npos) {
+    boost::system::error_code ec;
+    auto body = json::parse(req.body, ec);
+    if (ec || !body.is_object()) return respond(problem_response(400, "the body must be a JSON object {\"counter\": n}"));
+    if (const auto* c = body.as_object().if_contains("counter"); c != nullptr && !c->is_null()) {
+      if (!c->is_int64() || c->as_int64() < 1 || c->as_int64() > 240)
+        return respond(problem_response(400, "\"counter\" must be 1..240"));
+      counter = static_cast<std::uint8_t>(c->as_int64());
+    }
+  }
+  if (auto err = check_bus(app, net)) return respond(std::move(*err));
+  app.send_sync(net, counter);
+  json::object out;
+  out["network"] = net;
+  out["counter"] = counter ? json::value(*counter) : json::value(nullptr);
+  respond(json_response(out));
+}
+
+}  // namespace
+
+void register_rest_routes(http::HttpServer& server, App& app) {
+  App* a = &app;
+  auto route = [&](const char* method, std::string_view pattern, auto fn) {
+    server.add_route(method, pattern, [a, fn](const Request& req, Responder respond) { fn(*a, req, std::move(respond)); });
+  };
+  const std::string node = "/api/v1/networks/{net}/nodes/{node}";
+  route("GET", "/api/v1/gateway", get_gateway);
+  route("GET", "/api/v1/networks/{net}", get_network);
+  route("GET", "/api/v1/networks/{net}/nodes", get_nodes);
+  route("GET", node, get_node);
+  route("GET", node + "/sdo/{index}/{sub}",
+        [](App& a2, const Request& req, Responder r) { sdo(a2, false, req, std::move(r)); });
+  route("PUT", node + "/sdo/{index}/{sub}",
+        [](App& a2, const Request& req, Responder r) { sdo(a2, true, req, std::move(r)); });
+  route("POST", node + "/nmt", nmt);
+  route("GET", node + "/od", get_od);
+  route("GET", node + "/emcy", get_emcy);
+  route("PUT", node + "/rpdo/{n}", rpdo);
+  route("POST", "/api/v1/networks/{net}/sync", sync);
+}
+
+}  // namespace gateway

@@ -1,0 +1,425 @@
+// The REST routes against the whole gateway on the simulated demo network
+// (nodes 5: CiA 402 drive, 10 and 11: CiA 401 I/O), over real HTTP/1.1 on
+// 127.0.0.1. The client is a plain blocking socket on its own thread
+// (one request per connection, "Connection: close"); the test thread runs
+// the io_context meanwhile.
+#include "rest_api.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/read.hpp>
+#include <boost/asio/write.hpp>
+#include <boost/json.hpp>
+#include <cctype>
+#include <future>
+#include <thread>
+
+#include "canopen_gateway.pb.h"
+
+namespace gateway {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+namespace json = boost::json;
+
+struct HttpReply {
+  int status = 0;
+  std::string content_type;
+  std::string body;
+  json::value parsed;  // the body as JSON; null when it is not
+  const json::value& json() const { return parsed; }
+};
+
+// One request on a fresh connection; blocking; run on a separate thread.
+HttpReply fetch(std::uint16_t port, std::string method, std::string target, std::string body,
+                std::vector<std::string> headers) {
+  namespace asio = boost::asio;
+  asio::io_context io;
+  asio::ip::tcp::socket s(io);
+  s.connect({asio::ip::make_address("127.0.0.1"), port});
+  std::string req = method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n";
+  for (const auto& h : headers) req += h + "\r\n";
+  if (!body.empty() || method == "PUT" || method == "POST")
+    req += "Content-Length: " + std::to_string(body.size()) + "\r\n";
+  req += "\r\n" + body;
+  asio::write(s, asio::buffer(req));
+  std::string all;
+  boost::system::error_code ec;
+  asio::read(s, asio::dynamic_buffer(all), ec);  // until the server closes
+  HttpReply r;
+  const auto head_end = all.find("\r\n\r\n");
+  if (all.size() < 12 || head_end == std::string::npos) return r;
+  r.status = std::stoi(all.substr(9, 3));
+  std::string head = all.substr(0, head_end);
+  for (char& c : head) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (auto p = head.find("\r\ncontent-type: "); p != std::string::npos) {
+    auto e = head.find("\r\n", p + 2);
+    r.content_type = all.substr(p + 16, (e == std::string::npos ? head.size() : e) - p - 16);
+  }
+  r.body = all.substr(head_end + 4);
+  if (head.find("transfer-encoding: chunked") != std::string::npos) {  // de-chunk
+    std::string out;
+    std::size_t pos = 0;
+    while (pos < r.body.size()) {
+      const auto eol = r.body.find("\r\n", pos);
+      if (eol == std::string::npos) break;
+      const auto n = std::stoul(r.body.substr(pos, eol - pos), nullptr, 16);
+      if (n == 0) break;
+      out += r.body.substr(eol + 2, n);
+      pos = eol + 2 + n + 2;
+    }
+    r.body = out;
+  }
+  boost::system::error_code jec;
+  auto v = json::parse(r.body, jec);
+  if (!jec) r.parsed = std::move(v);
+  return r;
+}
+
+struct RestRig {
+  explicit RestRig(std::chrono::milliseconds emcy_period = {}) {
+    CliOptions cli;
+    cli.demo = true;
+    cli.gateway_id = "test";
+    Config c = merge(Config{}, cli);
+    if (emcy_period.count() > 0) c.networks.at(0).simulation.emcy_period = emcy_period;
+    log = std::make_unique<Logger>(LogLevel::Error);
+    app = std::make_unique<App>(io, c, *log);
+    http::HttpConfig hc;
+    hc.address = "127.0.0.1";
+    hc.port = 0;
+    server = std::make_unique<http::HttpServer>(io, hc);
+    register_rest_routes(*server, *app);
+    app->start();
+    server->start();
+    port = server->bound_port();
+  }
+  ~RestRig() {
+    server->stop();
+    app->stop();
+    io.run_for(50ms);
+  }
+
+  template <typename Pred>
+  bool run_until(Pred pred, std::chrono::milliseconds limit = 10s) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (!pred() && std::chrono::steady_clock::now() < end) io.run_for(10ms);
+    return pred();
+  }
+
+  HttpReply request(std::string method, std::string target, std::string body = {},
+                    std::vector<std::string> headers = {}) {
+    if (!body.empty() && headers.empty()) headers.push_back("Content-Type: application/json");
+    auto f = std::async(std::launch::async, fetch, port, method, target, body, headers);
+    auto ready = [&] { return f.wait_for(0s) == std::future_status::ready; };
+    const bool done = run_until(ready, 10s);
+    EXPECT_TRUE(done) << method << " " << target << ": no answer";
+    if (!done) {
+      // Closing every connection ends the client's read, so the future
+      // (whose destructor waits for the thread) does not block the test.
+      server->stop();
+      run_until(ready, 5s);
+      return {};
+    }
+    return f.get();
+  }
+
+  bool operational(std::uint8_t node) const {
+    const auto* n = app->cache().node(1, node);
+    return n != nullptr && n->state == canopen::NmtState::Operational;
+  }
+  bool all_operational() const { return operational(5) && operational(10) && operational(11); }
+
+  boost::asio::io_context io;
+  std::unique_ptr<Logger> log;
+  std::unique_ptr<App> app;
+  std::unique_ptr<http::HttpServer> server;
+  std::uint16_t port = 0;
+};
+
+const std::string kNode5 = "/api/v1/networks/1/nodes/5";
+
+TEST(Rest, GatewayAndNetwork) {
+  RestRig rig;
+  auto g = rig.request("GET", "/api/v1/gateway");
+  ASSERT_EQ(g.status, 200) << g.body;
+  EXPECT_EQ(g.content_type, "application/json");
+  auto o = g.json().as_object();
+  EXPECT_EQ(o.at("gatewayId").as_string(), "test");
+  EXPECT_EQ(o.at("nodeId").to_number<int>(), 127);
+  EXPECT_TRUE(o.at("version").is_string());
+  EXPECT_TRUE(o.at("uptimeSeconds").is_number());
+  ASSERT_EQ(o.at("networks").as_array().size(), 1U);
+  EXPECT_EQ(o.at("networks").as_array()[0].as_object().at("bus").as_string(), "error-active");
+
+  auto n = rig.request("GET", "/api/v1/networks/1");
+  ASSERT_EQ(n.status, 200) << n.body;
+  auto no = n.json().as_object();
+  EXPECT_EQ(no.at("interface").as_string(), "demo");
+  EXPECT_TRUE(no.at("simulated").as_bool());
+  EXPECT_TRUE(no.at("counters").is_object());
+  EXPECT_TRUE(no.at("sync").as_object().contains("producer"));
+  EXPECT_TRUE(no.at("time").as_object().contains("producer"));
+
+  auto missing = rig.request("GET", "/api/v1/networks/9");
+  EXPECT_EQ(missing.status, 404);
+  EXPECT_EQ(missing.content_type, "application/problem+json");
+  EXPECT_EQ(rig.request("GET", "/api/v1/networks/x").status, 400);
+}
+
+TEST(Rest, NodesAndOneNodeWithTpdoValues) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.all_operational(); }));
+  ASSERT_TRUE(rig.run_until([&] { return !rig.app->cache().node(1, 5)->values.empty(); }));
+  auto list = rig.request("GET", "/api/v1/networks/1/nodes");
+  ASSERT_EQ(list.status, 200) << list.body;
+  const auto& nodes = list.json().as_object().at("nodes").as_array();
+  ASSERT_GE(nodes.size(), 3U);
+  bool saw5 = false;
+  for (const auto& v : nodes) {
+    const auto& n = v.as_object();
+    if (n.at("node").to_number<int>() != 5) continue;
+    saw5 = true;
+    EXPECT_EQ(n.at("name").as_string(), "drive-x");
+    EXPECT_EQ(n.at("state").as_string(), "operational");
+    EXPECT_TRUE(n.at("configured").as_bool());
+    EXPECT_EQ(n.at("bootCount").to_number<int>(), 1);
+    EXPECT_TRUE(n.at("lastHeartbeatAgeMs").is_number());
+    EXPECT_TRUE(n.contains("identity"));
+    EXPECT_TRUE(n.contains("emcyCount"));
+  }
+  EXPECT_TRUE(saw5);
+
+  auto one = rig.request("GET", kNode5);
+  ASSERT_EQ(one.status, 200) << one.body;
+  bool statusword = false;
+  for (const auto& v : one.json().as_object().at("values").as_array()) {
+    const auto& e = v.as_object();
+    if (e.at("index").to_number<int>() == 0x6041 && e.at("subIndex").to_number<int>() == 0) {
+      statusword = true;
+      EXPECT_EQ(e.at("name").as_string(), "Statusword");
+      EXPECT_EQ(e.at("type").as_string(), "u16");
+      EXPECT_TRUE(e.at("value").is_number());
+      EXPECT_THAT(std::string(e.at("timestamp").as_string()), HasSubstr("T"));
+    }
+  }
+  EXPECT_TRUE(statusword) << one.body;
+  EXPECT_EQ(rig.request("GET", "/api/v1/networks/1/nodes/99").status, 404);
+  EXPECT_EQ(rig.request("GET", "/api/v1/networks/1/nodes/300").status, 400);
+}
+
+TEST(Rest, SdoReadWriteRoundTripAndErrors) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
+  auto w = rig.request("PUT", kNode5 + "/sdo/6060/0", R"({"value": 3})");
+  ASSERT_EQ(w.status, 200) << w.body;
+  auto r = rig.request("GET", kNode5 + "/sdo/0x6060/0");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.json().as_object().at("value").to_number<int>(), 3);
+  EXPECT_EQ(r.json().as_object().at("type").as_string(), "i8");
+  EXPECT_EQ(r.json().as_object().at("raw").as_string(), "03");
+  // Below the EDS's low limit: 400, nothing sent.
+  auto low = rig.request("PUT", kNode5 + "/sdo/6060/0", R"({"value": -3})");
+  EXPECT_EQ(low.status, 400) << low.body;
+  EXPECT_THAT(low.body, HasSubstr("low limit"));
+  // 1000h with the h suffix and sub-index in 0x hex.
+  auto dt = rig.request("GET", kNode5 + "/sdo/1000h/0x0");
+  ASSERT_EQ(dt.status, 200) << dt.body;
+  EXPECT_EQ(dt.json().as_object().at("value").to_number<std::uint32_t>() & 0xFFFF, 402U);
+
+  // Not in the EDS: 404; with ?type= the device is asked and aborts: 422.
+  EXPECT_EQ(rig.request("GET", kNode5 + "/sdo/5FFF/0").status, 404);
+  auto abort = rig.request("GET", kNode5 + "/sdo/5FFF/0?type=u8");
+  EXPECT_EQ(abort.status, 422) << abort.body;
+  EXPECT_EQ(abort.content_type, "application/problem+json");
+  EXPECT_EQ(abort.json().as_object().at("abortCode").as_string(), "0x06020000");
+  // Out of range for i8: 400 before anything goes on the bus.
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/sdo/6060/0", R"({"value": 300})").status, 400);
+  // Malformed path parts and bodies: 400.
+  EXPECT_EQ(rig.request("GET", kNode5 + "/sdo/zz/0").status, 400);
+  EXPECT_EQ(rig.request("GET", kNode5 + "/sdo/6060/256").status, 400);
+  EXPECT_EQ(rig.request("GET", kNode5 + "/sdo/6060/0?type=u99").status, 400);
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/sdo/6060/0", R"({"value": )").status, 400);
+  // Unknown network: 404.
+  EXPECT_EQ(rig.request("GET", "/api/v1/networks/2/nodes/5/sdo/1000/0").status, 404);
+}
+
+TEST(Rest, SdoTimeoutIs504) {
+  RestRig rig;
+  auto r = rig.request("GET", "/api/v1/networks/1/nodes/42/sdo/1000/0?type=u32");
+  EXPECT_EQ(r.status, 504) << r.body;
+  EXPECT_EQ(r.json().as_object().at("abortCode").as_string(), "0x05040000");
+}
+
+TEST(Rest, SdoReadInProtobuf) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
+  auto r = rig.request("GET", kNode5 + "/sdo/1000/0", {}, {"Accept: application/x-protobuf"});
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.content_type, "application/x-protobuf");
+  canopen::gateway::v1::SdoResponse m;
+  ASSERT_TRUE(m.ParseFromString(r.body));
+  EXPECT_EQ(m.type(), "u32");
+  EXPECT_EQ(static_cast<std::uint32_t>(m.value().number_value()) & 0xFFFF, 402U);
+  // Problems come as a protobuf Problem too.
+  auto missing = rig.request("GET", kNode5 + "/sdo/5FFF/0", {}, {"Accept: application/x-protobuf"});
+  EXPECT_EQ(missing.status, 404);
+  EXPECT_EQ(missing.content_type, "application/x-protobuf");
+  canopen::gateway::v1::Problem p;
+  ASSERT_TRUE(p.ParseFromString(missing.body));
+  EXPECT_EQ(p.status(), 404U);
+  // A JSON body with a protobuf reply, and a protobuf body.
+  auto w = rig.request("PUT", kNode5 + "/sdo/6060/0", R"({"value": 4})",
+                       {"Content-Type: application/json", "Accept: application/x-protobuf"});
+  ASSERT_EQ(w.status, 200) << w.body;
+  EXPECT_EQ(w.content_type, "application/x-protobuf");
+  canopen::gateway::v1::SdoWriteRequest req;
+  req.mutable_value()->set_number_value(6);
+  auto pw = rig.request("PUT", kNode5 + "/sdo/6060/0", req.SerializeAsString(),
+                        {"Content-Type: application/x-protobuf"});
+  ASSERT_EQ(pw.status, 200) << pw.body;
+  auto back = rig.request("GET", kNode5 + "/sdo/6060/0");
+  EXPECT_EQ(back.json().as_object().at("value").to_number<int>(), 6) << back.body;
+}
+
+TEST(Rest, NmtStopAndStartAll) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(10); }));
+  auto stop = rig.request("POST", "/api/v1/networks/1/nodes/10/nmt", R"({"command": "stop"})");
+  ASSERT_EQ(stop.status, 200) << stop.body;
+  EXPECT_TRUE(rig.run_until([&] {
+    const auto* n = rig.app->cache().node(1, 10);
+    return n->state == canopen::NmtState::Stopped;
+  }));
+  auto list = rig.request("GET", "/api/v1/networks/1/nodes/10");
+  EXPECT_EQ(list.json().as_object().at("state").as_string(), "stopped") << list.body;
+  EXPECT_TRUE(rig.operational(5)) << "only node 10 was addressed";
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/nodes/0/nmt", R"({"command": "start"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] { return rig.operational(10); }));
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/nodes/10/nmt", R"({"command": "jump"})").status, 400);
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/nodes/128/nmt", R"({"command": "stop"})").status, 400);
+  // A protobuf NmtRequest gets a protobuf NmtResponse.
+  canopen::gateway::v1::NmtRequest req;
+  req.set_command("preop");
+  auto pb = rig.request("POST", "/api/v1/networks/1/nodes/11/nmt", req.SerializeAsString(),
+                        {"Content-Type: application/x-protobuf"});
+  ASSERT_EQ(pb.status, 200) << pb.body;
+  EXPECT_EQ(pb.content_type, "application/x-protobuf");
+  canopen::gateway::v1::NmtResponse resp;
+  ASSERT_TRUE(resp.ParseFromString(pb.body));
+  EXPECT_EQ(resp.node(), 11U);
+  EXPECT_EQ(resp.command(), "preop");
+  EXPECT_TRUE(rig.run_until([&] {
+    return rig.app->cache().node(1, 11)->state == canopen::NmtState::PreOperational;
+  }));
+}
+
+TEST(Rest, ObjectDictionaryFromTheEds) {
+  RestRig rig;
+  auto od = rig.request("GET", kNode5 + "/od");
+  ASSERT_EQ(od.status, 200) << od.body.substr(0, 300);
+  bool mode = false;
+  for (const auto& v : od.json().as_object().at("objects").as_array()) {
+    const auto& o = v.as_object();
+    if (o.at("index").to_number<int>() != 0x6060) continue;
+    mode = true;
+    EXPECT_EQ(o.at("indexHex").as_string(), "6060");
+    EXPECT_EQ(o.at("objectCode").as_string(), "VAR");
+    const auto& sub = o.at("subs").as_array().at(0).as_object();
+    EXPECT_EQ(sub.at("type").as_string(), "i8");
+    EXPECT_TRUE(sub.contains("access"));
+    EXPECT_TRUE(sub.contains("pdoMappable"));
+    EXPECT_TRUE(sub.contains("default"));
+  }
+  EXPECT_TRUE(mode);
+  auto none = rig.request("GET", "/api/v1/networks/1/nodes/42/od");
+  EXPECT_EQ(none.status, 404);
+  EXPECT_EQ(none.content_type, "application/problem+json");
+}
+
+TEST(Rest, EmcyListNewestFirst) {
+  RestRig rig(100ms);  // the simulated devices raise and reset an EMCY every 100 ms
+  ASSERT_TRUE(rig.run_until([&] {
+    const auto* n = rig.app->cache().node(1, 5);
+    return n != nullptr && n->emcy_count >= 2;
+  }));
+  auto e = rig.request("GET", kNode5 + "/emcy");
+  ASSERT_EQ(e.status, 200) << e.body;
+  const auto& o = e.json().as_object();
+  ASSERT_GE(o.at("emcy").as_array().size(), 2U) << e.body;
+  EXPECT_GE(o.at("emcyCount").to_number<int>(), 2);
+  const auto& first = o.at("emcy").as_array()[0].as_object();
+  EXPECT_THAT(std::string(first.at("timestamp").as_string()), HasSubstr("Z"));
+  EXPECT_EQ(first.at("manufacturerData").as_string().size(), 10U) << "5 bytes in hex";
+  EXPECT_TRUE(first.at("description").is_string());
+  std::uint64_t last = UINT64_MAX;
+  for (const auto& v : o.at("emcy").as_array()) {
+    const auto& m = v.as_object();
+    EXPECT_TRUE(m.contains("errorCode"));
+    EXPECT_TRUE(m.at("manufacturerData").is_string());
+    const auto seq = m.at("seq").to_number<std::uint64_t>();
+    EXPECT_LT(seq, last) << "newest first";
+    last = seq;
+  }
+}
+
+TEST(Rest, RpdoWrite) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
+  auto w = rig.request("PUT", kNode5 + "/rpdo/1", R"({"values": [{"index": "0x6040", "subIndex": 0, "value": 15}]})");
+  ASSERT_EQ(w.status, 200) << w.body;
+  EXPECT_EQ(w.json().as_object().at("cobId").to_number<int>(), 0x205);
+  EXPECT_EQ(w.json().as_object().at("raw").as_string(), "0f00");
+  // The drive got it: its Controlword reads back.
+  auto r = rig.request("GET", kNode5 + "/sdo/6040/0");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_EQ(r.json().as_object().at("value").to_number<int>(), 15);
+  auto raw = rig.request("PUT", kNode5 + "/rpdo/1", R"({"raw": "0600"})");
+  EXPECT_EQ(raw.status, 200) << raw.body;
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/rpdo/1", R"({"raw": "06"})").status, 400);
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/rpdo/1", R"({"values": [{"index": "0x6040", "value": 70000}]})").status,
+            400);
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/rpdo/1", R"({"values": [{"index": "0x6060", "value": 1}]})").status, 400);
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/rpdo/99", R"({"raw": "00"})").status, 404);
+  EXPECT_EQ(rig.request("PUT", "/api/v1/networks/1/nodes/42/rpdo/1", R"({"raw": "00"})").status, 404);
+}
+
+TEST(Rest, Sync) {
+  RestRig rig;
+  auto s = rig.request("POST", "/api/v1/networks/1/sync");
+  ASSERT_EQ(s.status, 200) << s.body;
+  auto c = rig.request("POST", "/api/v1/networks/1/sync", R"({"counter": 7})");
+  ASSERT_EQ(c.status, 200) << c.body;
+  EXPECT_EQ(c.json().as_object().at("counter").to_number<int>(), 7);
+  // The gateway's own services saw both (SYNC events in the cache).
+  EXPECT_TRUE(rig.run_until([&] {
+    const auto* n = rig.app->cache().network(1);
+    return n->sync_count >= 2 && n->last_sync_counter == std::uint8_t{7};
+  }, 2s)) << rig.app->cache().network(1)->sync_count;
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/sync", R"({"counter": 300})").status, 400);
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/3/sync").status, 404);
+}
+
+TEST(Rest, BusDownIs503) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
+  ASSERT_TRUE(rig.app->set_simulated_link(1, false));
+  auto sdo = rig.request("GET", kNode5 + "/sdo/1000/0");
+  EXPECT_EQ(sdo.status, 503) << sdo.body;
+  EXPECT_EQ(sdo.content_type, "application/problem+json");
+  EXPECT_EQ(rig.request("POST", kNode5 + "/nmt", R"({"command": "stop"})").status, 503);
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/sync").status, 503);
+  EXPECT_EQ(rig.request("PUT", kNode5 + "/rpdo/1", R"({"raw": "0600"})").status, 503);
+  auto net = rig.request("GET", "/api/v1/networks/1");
+  EXPECT_EQ(net.json().as_object().at("bus").as_string(), "down") << net.body;
+  // Back up: requests work again.
+  ASSERT_TRUE(rig.app->set_simulated_link(1, true));
+  EXPECT_EQ(rig.request("GET", kNode5 + "/sdo/1000/0").status, 200);
+}
+
+}  // namespace
+}  // namespace gateway
