@@ -170,6 +170,11 @@ class Subscriber {
       : filters_(std::move(filters)), opts_(o), cli_(uri, id, ::mqtt::create_options(o.version)) {
     cli_.set_message_callback([this](::mqtt::const_message_ptr m) {
       std::lock_guard lk(mu_);
+      // DUP set: the broker delivers again a message this subscriber already
+      // got, because the broker restarted before its PUBACK was stored
+      // (broker -> subscriber QoS 1). Not the publisher's doing: a resend
+      // by the publisher is a new PUBLISH and arrives without DUP.
+      if (m->is_duplicate()) return;
       msgs_.push_back(std::move(m));
       cv_.notify_all();
     });
