@@ -538,6 +538,9 @@ void App::handle_request(const ApiRequest& req, ReplyFn reply) {
 
 namespace {
 
+// Who asked, for the audit log.
+std::string requester(const ApiRequest& req) { return req.who.empty() ? std::string("anonymous") : req.who; }
+
 // The type of index/sub: the request's, else the node's EDS/DCF entry's.
 // DOMAIN (raw hex) when neither knows. Error reply when the EDS lacks it.
 std::optional<ApiReply> resolve_type(const canopen::eds::DeviceDescription* desc, std::uint16_t index,
@@ -625,9 +628,7 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
   ++counters_.sdo_requests;
   r.on_done = [this, type, opts, reply](canopen::sdo::TransferResult&& res) {
     if (!res.ok()) {
-      if (res.origin == canopen::sdo::Origin::Remote) ++counters_.sdo_aborts;
-      if (res.error == make_error_code(canopen::SdoAbort::Timeout)) ++counters_.sdo_timeouts;
-      reply(sdo_error_reply(res.error, res.origin == canopen::sdo::Origin::Remote, res.detail, opts));
+      reply(transfer_failed(res, opts));
       return;
     }
     auto v = canopen::decode(type, res.data);
@@ -639,12 +640,7 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
     }
     reply(sdo_response(*v, opts));
   };
-  auto submitted = n.network->sdo().upload(std::move(r), canopen::SteadyClock::now());
-  if (!submitted) {
-    reply(problem(429, "too many SDO requests queued for node " + std::to_string(req.node), opts));
-    return;
-  }
-  n.driver->poke();
+  submitted(n, n.network->sdo().upload(std::move(r), canopen::SteadyClock::now()), req.node, opts, reply);
 }
 
 void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
@@ -681,7 +677,7 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   }
   ++counters_.sdo_requests;
   const canopen::Value written = *value;
-  const std::string audit = "SDO write by " + (req.who.empty() ? std::string("anonymous") : req.who) + ": net " +
+  const std::string audit = "SDO write by " + requester(req) + ": net " +
                             std::to_string(n.number) + " node " + std::to_string(req.node) + " " + hex4(index) +
                             " sub " + std::to_string(sub) + " = " + canopen::format_value(written);
   if (own) {
@@ -703,18 +699,29 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   r.sub = sub;
   r.on_done = [this, opts, reply, written, audit](canopen::sdo::TransferResult&& res) {
     if (!res.ok()) {
-      if (res.origin == canopen::sdo::Origin::Remote) ++counters_.sdo_aborts;
-      if (res.error == make_error_code(canopen::SdoAbort::Timeout)) ++counters_.sdo_timeouts;
       log_.info("audit: " + audit + ": " + res.error.message());
-      reply(sdo_error_reply(res.error, res.origin == canopen::sdo::Origin::Remote, res.detail, opts));
+      reply(transfer_failed(res, opts));
       return;
     }
     log_.info("audit: " + audit + ": ok");
     reply(sdo_response(written, opts));
   };
-  auto submitted = n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now());
-  if (!submitted) {
-    reply(problem(429, "too many SDO requests queued for node " + std::to_string(req.node), opts));
+  submitted(n, n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now()), req.node,
+            opts, reply);
+}
+
+ApiReply App::transfer_failed(const canopen::sdo::TransferResult& res, const ReplyOptions& opts) {
+  const bool remote = res.origin == canopen::sdo::Origin::Remote;
+  if (remote) ++counters_.sdo_aborts;
+  if (res.error == make_error_code(canopen::SdoAbort::Timeout)) ++counters_.sdo_timeouts;
+  return sdo_error_reply(res.error, remote, res.detail, opts);
+}
+
+void App::submitted(Net& n, const canopen::Result<canopen::sdo::RequestId>& id, std::uint8_t node,
+                    const ReplyOptions& opts, const ReplyFn& reply) {
+  // Queue full for the node (060A0023h): the client should come back later.
+  if (!id) {
+    reply(problem(429, "too many SDO requests queued for node " + std::to_string(node), opts));
     return;
   }
   n.driver->poke();
@@ -732,9 +739,8 @@ void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
   ++counters_.nmt_commands;
   n.network->send_nmt(params->command, req.node);
   n.driver->poke();
-  log_.info("audit: NMT " + std::string(nmt_command_name(params->command)) + " by " +
-            (req.who.empty() ? std::string("anonymous") : req.who) + ": net " + std::to_string(n.number) + " node " +
-            std::to_string(req.node) + ": sent");
+  log_.info("audit: NMT " + std::string(nmt_command_name(params->command)) + " by " + requester(req) + ": net " +
+            std::to_string(n.number) + " node " + std::to_string(req.node) + ": sent");
   log_.flush();
   reply(nmt_response(n.number, req.node, params->command, opts));
 }

@@ -24,7 +24,9 @@
 
 #include "canopen/can/bus_state.hpp"
 #include "canopen/can/channel.hpp"
+#include "canopen/sdo/client.hpp"
 #include "config.hpp"
+#include "request_codec.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
 #include "pipeline.hpp"
@@ -120,6 +122,12 @@ class App {
   void sdo_read(Net& net, const ApiRequest& req, ReplyFn reply);
   void sdo_write(Net& net, const ApiRequest& req, ReplyFn reply);
   void nmt(Net& net, const ApiRequest& req, ReplyFn reply);
+  // A failed SDO transfer: counted, and turned into its reply (422/504/502).
+  ApiReply transfer_failed(const canopen::sdo::TransferResult& res, const ReplyOptions& opts);
+  // After submitting an SDO transfer: 429 when the node's queue was full,
+  // else the driver follows the new deadline.
+  void submitted(Net& net, const canopen::Result<canopen::sdo::RequestId>& id, std::uint8_t node,
+                 const ReplyOptions& opts, const ReplyFn& reply);
   void start_mqtt();
 
   boost::asio::io_context& io_;

@@ -66,21 +66,7 @@ bool is_utf8(std::string_view s) {
   return true;
 }
 
-std::string to_utf8(std::string_view s) {
-  if (is_utf8(s)) return std::string(s);
-  std::string out;
-  out.reserve(s.size() * 2);
-  for (char c : s) {
-    const auto b = static_cast<unsigned char>(c);
-    if (b < 0x80) {
-      out += c;
-    } else {
-      out += static_cast<char>(0xC0 | (b >> 6));
-      out += static_cast<char>(0x80 | (b & 0x3F));
-    }
-  }
-  return out;
-}
+std::string to_utf8(std::string_view s) { return is_utf8(s) ? std::string(s) : canopen::latin1_to_utf8(s); }
 
 void append_json_string(std::string& out, std::string_view s) {
   out += '"';

@@ -242,43 +242,61 @@ canopen::Result<canopen::Value> SdoWriteParams::value_as(canopen::DataType t) co
   return canopen::value_from_json(t, value);
 }
 
+namespace {
+
+// The fields SDO read and write requests share: address, type, and the MQTT
+// 3.1.1 reply address. P is SdoReadParams or SdoWriteParams.
+template <typename P, typename M>
+std::optional<canopen::Error> common_from_proto(const M& m, P& p) {
+  if (m.index() > 0xFFFF) return fail("index must be 0..65535");
+  if (m.sub_index() > 0xFF) return fail("subIndex must be 0..255");
+  // proto3 has no presence for these: a zero index is "not given" (no object 0000h exists).
+  if (m.index() != 0) p.index = static_cast<std::uint16_t>(m.index());
+  if (m.index() != 0 || m.sub_index() != 0) p.sub = static_cast<std::uint8_t>(m.sub_index());
+  auto t = type_text(m.type());
+  if (!t) return t.error();
+  p.type = *t;
+  p.reply_to = m.reply_to();
+  p.correlation_id = m.correlation_id();
+  return std::nullopt;
+}
+
+template <typename P>
+std::optional<canopen::Error> common_from_json(Fields& f, P& p) {
+  auto index = index_field(f.get("index"));
+  if (!index) return index.error();
+  auto sub = sub_field(f.get("subIndex", "sub_index"));
+  if (!sub) return sub.error();
+  auto type = string_field(f.get("type"), "type");
+  if (!type) return type.error();
+  auto t = type_text(*type);
+  if (!t) return t.error();
+  auto reply_to = string_field(f.get("replyTo", "reply_to"), "replyTo");
+  if (!reply_to) return reply_to.error();
+  auto corr = string_field(f.get("correlationId", "correlation_id"), "correlationId");
+  if (!corr) return corr.error();
+  p.index = *index;
+  p.sub = *sub;
+  p.type = *t;
+  p.reply_to = std::move(*reply_to);
+  p.correlation_id = std::move(*corr);
+  return std::nullopt;
+}
+
+}  // namespace
+
 canopen::Result<SdoReadParams> parse_sdo_read(std::string_view body, bool protobuf, bool require_address) {
   SdoReadParams p;
   if (protobuf) {
     pb::SdoReadRequest m;
     if (!parse_proto(m, body)) return fail("body is not a valid SdoReadRequest protobuf message");
-    if (m.index() > 0xFFFF) return fail("index must be 0..65535");
-    if (m.sub_index() > 0xFF) return fail("subIndex must be 0..255");
-    // proto3 has no presence for these: a zero index is "not given" (no object 0000h exists).
-    if (m.index() != 0) p.index = static_cast<std::uint16_t>(m.index());
-    if (m.index() != 0 || m.sub_index() != 0) p.sub = static_cast<std::uint8_t>(m.sub_index());
-    auto t = type_text(m.type());
-    if (!t) return t.error();
-    p.type = *t;
-    p.reply_to = m.reply_to();
-    p.correlation_id = m.correlation_id();
+    if (auto e = common_from_proto(m, p)) return *e;
   } else {
     auto obj = parse_object(body);
     if (!obj) return obj.error();
     Fields f{*obj, {}};
-    auto index = index_field(f.get("index"));
-    if (!index) return index.error();
-    auto sub = sub_field(f.get("subIndex", "sub_index"));
-    if (!sub) return sub.error();
-    auto type = string_field(f.get("type"), "type");
-    if (!type) return type.error();
-    auto t = type_text(*type);
-    if (!t) return t.error();
-    auto reply_to = string_field(f.get("replyTo", "reply_to"), "replyTo");
-    if (!reply_to) return reply_to.error();
-    auto corr = string_field(f.get("correlationId", "correlation_id"), "correlationId");
-    if (!corr) return corr.error();
+    if (auto e = common_from_json(f, p)) return *e;
     if (auto u = f.unknown()) return unknown_field(*u);
-    p.index = *index;
-    p.sub = *sub;
-    p.type = *t;
-    p.reply_to = std::move(*reply_to);
-    p.correlation_id = std::move(*corr);
   }
   if (!complete_address(p, require_address)) return fail("index is required");
   return p;
@@ -289,40 +307,15 @@ canopen::Result<SdoWriteParams> parse_sdo_write(std::string_view body, bool prot
   if (protobuf) {
     pb::SdoWriteRequest m;
     if (!parse_proto(m, body)) return fail("body is not a valid SdoWriteRequest protobuf message");
-    if (m.index() > 0xFFFF) return fail("index must be 0..65535");
-    if (m.sub_index() > 0xFF) return fail("subIndex must be 0..255");
-    if (m.index() != 0) p.index = static_cast<std::uint16_t>(m.index());
-    if (m.index() != 0 || m.sub_index() != 0) p.sub = static_cast<std::uint8_t>(m.sub_index());
-    auto t = type_text(m.type());
-    if (!t) return t.error();
-    p.type = *t;
+    if (auto e = common_from_proto(m, p)) return *e;
     if (m.has_value()) p.value = detail::proto_value_to_json(m.value());
-    p.reply_to = m.reply_to();
-    p.correlation_id = m.correlation_id();
   } else {
     auto obj = parse_object(body);
     if (!obj) return obj.error();
     Fields f{*obj, {}};
-    auto index = index_field(f.get("index"));
-    if (!index) return index.error();
-    auto sub = sub_field(f.get("subIndex", "sub_index"));
-    if (!sub) return sub.error();
-    auto type = string_field(f.get("type"), "type");
-    if (!type) return type.error();
-    auto t = type_text(*type);
-    if (!t) return t.error();
-    auto reply_to = string_field(f.get("replyTo", "reply_to"), "replyTo");
-    if (!reply_to) return reply_to.error();
-    auto corr = string_field(f.get("correlationId", "correlation_id"), "correlationId");
-    if (!corr) return corr.error();
-    const json::value* value = f.get("value");
+    if (auto e = common_from_json(f, p)) return *e;
+    if (const json::value* value = f.get("value")) p.value = *value;
     if (auto u = f.unknown()) return unknown_field(*u);
-    p.index = *index;
-    p.sub = *sub;
-    p.type = *t;
-    if (value) p.value = *value;
-    p.reply_to = std::move(*reply_to);
-    p.correlation_id = std::move(*corr);
   }
   if (p.value.is_null()) return fail("value is required");
   if (!complete_address(p, require_address)) return fail("index is required");

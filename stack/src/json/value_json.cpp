@@ -73,21 +73,7 @@ bool is_valid_utf8(const std::string& s) { return parse_value(DataType::UnicodeS
 
 // VISIBLE_STRING bytes as JSON text: UTF-8 as is, anything else as Latin-1,
 // so the serialized JSON is always valid.
-std::string visible_to_utf8(const std::string& s) {
-  if (is_valid_utf8(s)) return s;
-  std::string out;
-  out.reserve(s.size() * 2);
-  for (char c : s) {
-    const auto b = static_cast<unsigned char>(c);
-    if (b < 0x80) {
-      out += c;
-    } else {
-      out += static_cast<char>(0xC0 | (b >> 6));
-      out += static_cast<char>(0x80 | (b & 0x3F));
-    }
-  }
-  return out;
-}
+std::string visible_to_utf8(const std::string& s) { return is_valid_utf8(s) ? s : latin1_to_utf8(s); }
 
 // Numbers in JSON strings: decimal or 0x hex. Leading zeros are decimal
 // ("010" is 10), unlike EDS text where they mean octal.
@@ -284,6 +270,21 @@ Result<Value> value_from_json(DataType type, const json::value& j) {
   if (!j.is_string()) return wrong_kind(type, j);
   const json::string& s = j.get_string();
   return parse_value(type, std::string_view(s.data(), s.size()));
+}
+
+std::string latin1_to_utf8(std::string_view s) {
+  std::string out;
+  out.reserve(s.size() * 2);
+  for (char c : s) {
+    const auto b = static_cast<unsigned char>(c);
+    if (b < 0x80) {
+      out += c;
+    } else {
+      out += static_cast<char>(0xC0 | (b >> 6));
+      out += static_cast<char>(0x80 | (b & 0x3F));
+    }
+  }
+  return out;
 }
 
 }  // namespace canopen
