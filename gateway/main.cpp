@@ -3,6 +3,7 @@
 // everything on one io_context: the CANopen stack, MQTT publishing and the
 // HTTP/WebSocket server. See gateway/app/app.hpp.
 #include <csignal>
+#include <filesystem>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -11,6 +12,7 @@
 #include <boost/asio/signal_set.hpp>
 
 #include "app.hpp"
+#include "auth.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "cli.hpp"
 #include "config.hpp"
@@ -23,6 +25,20 @@ namespace {
 
 constexpr int kExitConfig = 2;
 constexpr int kExitCanUnavailable = 3;
+
+// The dashboard: installed beside the binary (<prefix>/share/canopen-gateway/web),
+// else the source tree's web/ (a build run from its checkout); "" = none.
+std::filesystem::path default_web_root() {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    auto installed = exe.parent_path().parent_path() / "share/canopen-gateway/web";
+    if (std::filesystem::is_regular_file(installed / "index.html", ec)) return installed;
+  }
+  const std::filesystem::path source = CANOPEN_SOURCE_WEB_DIR;
+  if (std::filesystem::is_regular_file(source / "index.html", ec)) return source;
+  return {};
+}
 
 void print_error(const std::string& msg) { std::fprintf(stderr, "canopen-gateway: error: %s\n", msg.c_str()); }
 
@@ -107,11 +123,20 @@ int run(const gateway::CliOptions& opts) {
   http_cfg.cert_file = config.http.cert_file;
   http_cfg.key_file = config.http.key_file;
   http_cfg.allowed_origins = config.http.allowed_origins;
-  if (!config.http.web_root.empty()) http_cfg.static_dir = config.http.web_root;
+  http_cfg.static_dir = config.http.web_root.empty() ? default_web_root() : std::filesystem::path(config.http.web_root);
+  if (http_cfg.static_dir.empty()) log.warn("http: no dashboard files found; set http.web-root");
   std::unique_ptr<gateway::http::HttpServer> http;
   try {
     http = std::make_unique<gateway::http::HttpServer>(io, http_cfg, &log);
     app->add_consumer([srv = http.get()](const gateway::EncodedEventPtr& ev) { srv->publish(ev); });
+    gateway::auth::HttpAuthSettings auth;
+    auth.enabled = config.http.auth;
+    auth.anonymous = config.http.anonymous_role();
+    auth.rate_limit = config.http.rate_limit;
+    auth.rate_burst = config.http.rate_burst;
+    if (auth.enabled && config.http.tokens.empty())
+      log.warn("http: no tokens configured: every local process may use the API as admin (loopback only)");
+    http->set_authorizer(gateway::auth::make_http_authorizer(auth, app->tokens(), log));
     gateway::register_rest_routes(*http, *app);
     http->add_route("GET", "/metrics", [&app, srv = http.get()](const gateway::http::Request&,
                                                                  gateway::http::Responder respond) {

@@ -13,6 +13,8 @@
 #include <functional>
 #include <string>
 
+#include "role.hpp"
+
 namespace gateway {
 
 enum class RequestKind : std::uint8_t { SdoRead, SdoWrite, Nmt };
@@ -24,6 +26,12 @@ struct ApiRequest {
   std::string body;           // JSON unless `protobuf`
   bool protobuf = false;      // body and reply in binary protobuf
   std::string who;            // authenticated identity, for the audit log ("" = anonymous)
+  // A transport that checked the caller itself (HTTP) sets `authenticated`
+  // and `role`. Otherwise (MQTT) `token` is the bearer token that came
+  // with the request ("" = none) and the handler checks it.
+  bool authenticated = false;
+  Role role = Role::None;
+  std::string token;
 };
 
 struct ApiReply {

@@ -92,6 +92,11 @@ App::App(boost::asio::io_context& io, Config config, Logger& log)
     : io_(io),
       config_(std::move(config)),
       log_(log),
+      tokens_([this] {
+        std::vector<auth::TokenEntry> t;
+        for (const auto& c : config_.http.tokens) t.push_back({c.name, c.role, c.sha256});
+        return auth::TokenStore(std::move(t));
+      }()),
       pipeline_(
           [ctx = EncodeContext{config_.gateway_id}](std::uint32_t network, const canopen::Event& ev) {
             return encode_event(ev, network, ctx);
@@ -509,9 +514,24 @@ void App::log_event(const Net& n, const canopen::Event& ev) {
 
 // ---- requests ----------------------------------------------------------------
 
-void App::handle_request(const ApiRequest& req, ReplyFn reply) {
+void App::handle_request(const ApiRequest& request, ReplyFn reply) {
   ReplyOptions opts;
-  opts.protobuf = req.protobuf;
+  opts.protobuf = request.protobuf;
+  ApiRequest identified;
+  if (!request.authenticated) {
+    identified = request;
+    const Role anonymous = config_.mqtt.requests_role.value_or(config_.http.anonymous_role());
+    if (auto d = auth::identify(identified, tokens_, anonymous)) {
+      ++counters_.auth_failures;
+      log_.info("audit: auth failure: " + (identified.who.empty() ? std::string("anonymous") : identified.who) +
+                ": request to net " + std::to_string(request.network) + " node " + std::to_string(request.node) +
+                ": " + std::to_string(d->status) + " " + d->detail);
+      log_.flush();
+      reply(problem(d->status, d->detail, opts));
+      return;
+    }
+  }
+  const ApiRequest& req = request.authenticated ? request : identified;
   Net* n = net(req.network);
   if (n == nullptr) {
     reply(problem(404, "network " + std::to_string(req.network) + " is not configured (networks are 1.." +
@@ -522,6 +542,13 @@ void App::handle_request(const ApiRequest& req, ReplyFn reply) {
   if (req.node > 127 || (req.node == 0 && req.kind != RequestKind::Nmt)) {
     reply(problem(400, "node-ID " + std::to_string(req.node) + " is out of range 1..127", opts));
     return;
+  }
+  if (req.kind != RequestKind::Nmt) {  // NMT: once its command is known
+    if (auto r = refused(*n, req, auth::required_role(req.kind, 0),
+                         req.kind == RequestKind::SdoRead ? "SDO read" : "SDO write", opts)) {
+      reply(std::move(*r));
+      return;
+    }
   }
   switch (req.kind) {
     case RequestKind::SdoRead:
@@ -736,6 +763,11 @@ void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
     return;
   }
   opts.correlation_id = params->correlation_id;
+  if (auto r = refused(n, req, auth::required_role(RequestKind::Nmt, static_cast<std::uint8_t>(params->command)),
+                       "NMT " + std::string(nmt_command_name(params->command)), opts)) {
+    reply(std::move(*r));
+    return;
+  }
   ++counters_.nmt_commands;
   n.network->send_nmt(params->command, req.node);
   n.driver->poke();
@@ -743,6 +775,17 @@ void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
             std::to_string(n.number) + " node " + std::to_string(req.node) + ": sent");
   log_.flush();
   reply(nmt_response(n.number, req.node, params->command, opts));
+}
+
+std::optional<ApiReply> App::refused(const Net& n, const ApiRequest& req, Role need, std::string_view what,
+                                     const ReplyOptions& opts) {
+  auto d = auth::check_role(req, need);
+  if (!d) return std::nullopt;
+  ++counters_.auth_failures;
+  log_.info("audit: auth failure: " + requester(req) + ": " + std::string(what) + " net " + std::to_string(n.number) +
+            " node " + std::to_string(req.node) + ": " + std::to_string(d->status) + " " + d->detail);
+  log_.flush();
+  return problem(d->status, d->detail, opts);
 }
 
 }  // namespace gateway

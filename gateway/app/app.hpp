@@ -24,6 +24,7 @@
 
 #include "canopen/can/bus_state.hpp"
 #include "canopen/can/channel.hpp"
+#include "auth.hpp"
 #include "canopen/sdo/client.hpp"
 #include "config.hpp"
 #include "request_codec.hpp"
@@ -60,14 +61,19 @@ class App {
   // io_context runs out of work.
   void stop();
 
-  // SDO read/write and NMT requests (MQTT; later REST). The reply comes
-  // later, on the io thread, exactly once.
+  // SDO read/write and NMT requests (REST and MQTT). The reply comes
+  // later, on the io thread, exactly once. A request that is not
+  // `authenticated` (MQTT) is identified by its token (config: http.tokens,
+  // mqtt.requests-role without one); every request's role is checked
+  // against auth::required_role (401/403, with an audit line).
   void handle_request(const ApiRequest& request, ReplyFn reply);
 
   // Extra consumer of every outgoing event (e.g. the WebSocket hub).
   void add_consumer(EventPipeline::Consumer c) { pipeline_.add_consumer(std::move(c)); }
 
   const Config& config() const { return config_; }
+  // The bearer tokens of the config (for the HTTP authorizer too).
+  const auth::TokenStore& tokens() const { return tokens_; }
   const StateCache& cache() const { return cache_; }
   const EventPipeline& pipeline() const { return pipeline_; }
   // The node's EDS/DCF on network `net`, if configured.
@@ -109,6 +115,7 @@ class App {
     std::uint64_t sdo_aborts = 0;
     std::uint64_t sdo_timeouts = 0;
     std::uint64_t nmt_commands = 0;
+    std::uint64_t auth_failures = 0;  // requests refused with 401/403 here (MQTT, NMT resets)
   };
   const Counters& counters() const { return counters_; }
 
@@ -122,6 +129,10 @@ class App {
   void sdo_read(Net& net, const ApiRequest& req, ReplyFn reply);
   void sdo_write(Net& net, const ApiRequest& req, ReplyFn reply);
   void nmt(Net& net, const ApiRequest& req, ReplyFn reply);
+  // The 401/403 reply (and audit line) when req.role may not do what needs
+  // `need`; nullopt when it may.
+  std::optional<ApiReply> refused(const Net& net, const ApiRequest& req, Role need, std::string_view what,
+                                  const ReplyOptions& opts);
   // A failed SDO transfer: counted, and turned into its reply (422/504/502).
   ApiReply transfer_failed(const canopen::sdo::TransferResult& res, const ReplyOptions& opts);
   // After submitting an SDO transfer: 429 when the node's queue was full,
@@ -133,6 +144,7 @@ class App {
   boost::asio::io_context& io_;
   Config config_;
   Logger& log_;
+  auth::TokenStore tokens_;
   StateCache cache_;
   EventPipeline pipeline_;
   std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks

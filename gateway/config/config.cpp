@@ -206,9 +206,17 @@ void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id
   }
 }
 
+Role parse_role(const At& a, bool allow_none = false) {
+  const auto s = a.str();
+  auto r = role_from_string(s);
+  if (!r || (*r == Role::None && !allow_none))
+    a.fail("'" + s + "' is not viewer, operator or admin" + (allow_none ? " or none" : ""));
+  return *r;
+}
+
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   a.expect_map({"uri", "client-id", "username", "password", "password-file", "tls", "format", "qos", "heartbeat",
-                "heartbeat-min-interval-ms", "queue"});
+                "heartbeat-min-interval-ms", "queue", "requests-role"});
   auto uri = a.get("uri");
   if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
   m.uri = uri->str();
@@ -245,6 +253,7 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
     if (!q->is_map()) q->fail("expected kind: level pairs, e.g. tpdo: 0");  // read in parse_config
   }
   if (auto v = a.get("heartbeat")) m.heartbeat = v->boolean();
+  if (auto v = a.get("requests-role")) m.requests_role = parse_role(*v, true);
   if (auto v = a.get("heartbeat-min-interval-ms")) m.heartbeat_min_interval = ms(*v, 3'600'000);
   if (auto q = a.get("queue")) {
     q->expect_map({"dir", "max-bytes", "max-messages"});
@@ -254,16 +263,9 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   }
 }
 
-Role parse_role(const At& a) {
-  const auto s = a.str();
-  if (s == "viewer") return Role::Viewer;
-  if (s == "operator") return Role::Operator;
-  if (s == "admin") return Role::Admin;
-  a.fail("'" + s + "' is not viewer, operator or admin");
-}
 
 void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
-  a.expect_map({"listen", "tls", "allowed-origins", "tokens", "auth", "web-root"});
+  a.expect_map({"listen", "tls", "allowed-origins", "tokens", "auth", "plain-http", "rate-limit", "web-root"});
   if (auto v = a.get("listen")) {
     if (!split_host_port(v->str(), h.address, h.port)) v->fail("'" + v->str() + "' is not ADDR:PORT");
   }
@@ -282,6 +284,13 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
     for (const auto& item : o->items()) h.allowed_origins.push_back(item.str());
   }
   if (auto v = a.get("auth")) h.auth = v->boolean();
+  if (auto v = a.get("plain-http")) h.plain_http = v->boolean();
+  if (auto r = a.get("rate-limit")) {
+    r->expect_map({"requests-per-second", "burst"});
+    if (auto v = r->get("requests-per-second")) h.rate_limit = static_cast<double>(v->integer(0, 1'000'000));
+    if (auto v = r->get("burst")) h.rate_burst = static_cast<double>(v->integer(1, 1'000'000));
+    h.rate_burst = std::max(h.rate_burst, h.rate_limit);
+  }
   if (auto v = a.get("web-root")) h.web_root = resolve(dir, v->str());
   if (auto t = a.get("tokens")) {
     std::set<std::string> names;
@@ -482,12 +491,17 @@ Config merge(Config c, const CliOptions& cli) {
                           (net.simulated ? std::string("the demo network") : net.interface));
     }
   }
-  // Bearer tokens are not checked by this version yet, so only loopback is
-  // safe; another address needs an explicit, visible opt-out.
-  if (c.http.auth && c.http.address != "127.0.0.1" && c.http.address != "::1" && c.http.address != "localhost")
-    throw ConfigError(where + ": http.listen: " + c.http.address +
-                      " is not loopback and this version does not check tokens yet; use 127.0.0.1, or set "
-                      "http.auth: false to expose the API without authentication (not advised)");
+  if (!c.mqtt.requests_role) c.mqtt.requests_role = c.http.anonymous_role();
+  if (c.http.auth && !c.http.loopback()) {
+    if (c.http.tokens.empty())
+      throw ConfigError(where + ": http.tokens: none configured, and http.listen " + c.http.address +
+                        " is not loopback: nobody could use the API; add tokens (see deploy/gateway.example.yaml), "
+                        "listen on 127.0.0.1, or set http.auth: false (not advised)");
+    if (c.http.cert_file.empty() && !c.http.plain_http)
+      throw ConfigError(where + ": http.tls: http.listen " + c.http.address +
+                        " is not loopback and bearer tokens would cross the network in clear text; configure "
+                        "http.tls (cert, key), or set http.plain-http: true to accept that");
+  }
   return c;
 }
 

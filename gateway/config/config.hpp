@@ -18,6 +18,7 @@
 #include "cli.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
+#include "role.hpp"
 
 namespace gateway {
 
@@ -93,10 +94,13 @@ struct MqttConfig {
   std::string queue_dir;              // disk buffer ("" = <state dir>/mqtt-queue)
   std::uint64_t queue_max_bytes = 256ULL << 20;
   std::uint64_t queue_max_messages = 1'000'000;
+  // Role of an MQTT request that carries no token (anyone who may publish
+  // to the request topics on the broker). Default: None (a token is
+  // required) when http.tokens are configured, else the role HTTP callers
+  // get without a token (admin: auth off, or loopback without tokens).
+  std::optional<Role> requests_role;
   int qos_for(EventKind k) const;
 };
-
-enum class Role : std::uint8_t { Viewer, Operator, Admin };
 
 struct TokenConfig {
   std::string name;    // who, in the audit log
@@ -110,8 +114,20 @@ struct HttpConfig {
   std::string cert_file, key_file;  // HTTPS/WSS when both are set
   std::vector<std::string> allowed_origins;
   std::vector<TokenConfig> tokens;
-  bool auth = true;  // off only in --demo or when explicitly disabled
+  // On by default (off in --demo). With tokens, every request but the
+  // dashboard's files and the OpenAPI document needs one. Without tokens
+  // the listener must be loopback, and local callers act as admin.
+  bool auth = true;
+  // Off loopback with auth on, plain HTTP would carry the tokens in clear
+  // text: refused unless TLS is configured or this is set.
+  bool plain_http = false;
+  double rate_limit = 50;  // requests per second per client address (0 = no limit)
+  double rate_burst = 100;
   std::string web_root;  // dashboard files ("" = the built-in default)
+
+  bool loopback() const { return address == "127.0.0.1" || address == "::1" || address == "localhost"; }
+  // What a caller without a token may do (Role::None: nothing).
+  Role anonymous_role() const { return !auth || tokens.empty() ? Role::Admin : Role::None; }
 };
 
 struct Config {

@@ -26,6 +26,7 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "event_message.hpp"
@@ -119,6 +120,8 @@ class HttpServer {
   // std::invalid_argument on a bad or duplicate pattern. The path
   // /api/v1/events is the server's own (WebSocket).
   void add_route(std::string method, std::string_view pattern, Handler handler);
+  // Every (method, pattern) added, in the order added.
+  std::vector<std::pair<std::string, std::string>> routes() const;
   // Replaces the security hook (default: allow everything).
   void set_authorizer(Authorizer authorizer);
 

@@ -6,6 +6,7 @@
 // once (later calls are ignored), and is a no-op once the connection is gone.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <map>
 #include <optional>
@@ -29,6 +30,16 @@ struct Request {
   std::string body;
   std::string peer;  // "127.0.0.1:50312" or "[::1]:50312"
   bool tls = false;
+  // The matched route pattern ("/api/v1/networks/{net}"), kEventsPath for
+  // the WebSocket upgrade, "" for static files.
+  std::string route;
+  // Set by the Authorizer for the handler: the authenticated identity (for
+  // audit lines; "" = anonymous) and the application's role value.
+  std::string who;
+  std::uint8_t role = 0;
+  // True when an Authorizer ran and let the request through; false when
+  // the server has none (everything is open).
+  bool authorized = false;
 
   // First value of a path parameter; "" when absent.
   std::string_view param(std::string_view name) const;
@@ -65,9 +76,11 @@ using Responder = std::function<void(Response)>;
 // after HttpConfig::handler_timeout.
 using Handler = std::function<void(const Request&, Responder)>;
 
-// Security hook, run before every route (including static files) and before
-// the WebSocket upgrade: nullopt = let the request through; a Response (e.g.
-// 401 problem+json) is sent instead of running the route.
-using Authorizer = std::function<std::optional<Response>(const Request&)>;
+// Security hook, run before every matched route (including static files)
+// and before the WebSocket upgrade, after the body has been read: nullopt =
+// let the request through (it may fill in `who` and `role`); a Response
+// (e.g. 401 problem+json) is sent instead of running the route. Paths that
+// match no route get 404/405 without it.
+using Authorizer = std::function<std::optional<Response>(Request&)>;
 
 }  // namespace gateway::http

@@ -60,6 +60,7 @@ Router::Match Router::match(std::string_view method, const std::vector<std::stri
   if (best) {
     m.kind = Match::Kind::Found;
     m.handler = &best->handler;
+    m.pattern = best->pattern;
     for (std::size_t i = 0; i < segments.size(); ++i)
       if (best->segments[i].param) m.params.emplace(best->segments[i].text, segments[i]);
     return m;
@@ -80,6 +81,13 @@ Router::Match Router::match(std::string_view method, const std::vector<std::stri
     m.allow += a;
   }
   return m;
+}
+
+std::vector<std::pair<std::string, std::string>> Router::list() const {
+  std::vector<std::pair<std::string, std::string>> out;
+  out.reserve(routes_.size());
+  for (const auto& r : routes_) out.emplace_back(r.method, r.pattern);
+  return out;
 }
 
 }  // namespace gateway::http

@@ -12,6 +12,7 @@
 
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "http_types.hpp"
@@ -27,6 +28,7 @@ class Router {
   struct Match {
     enum class Kind { Found, NotFound, MethodNotAllowed } kind = Kind::NotFound;
     const Handler* handler = nullptr;  // Found
+    std::string pattern;               // Found: the route's pattern
     std::map<std::string, std::string, std::less<>> params;
     std::string allow;  // MethodNotAllowed: "GET, PUT"
   };
@@ -35,6 +37,8 @@ class Router {
   Match match(std::string_view method, const std::vector<std::string>& segments) const;
 
   bool empty() const { return routes_.empty(); }
+  // (method, pattern) of every route, in the order added.
+  std::vector<std::pair<std::string, std::string>> list() const;
 
  private:
   struct Segment {

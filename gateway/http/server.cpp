@@ -400,6 +400,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
         send(std::move(r));
         return;
       }
+      req->route = std::string(kEventsPath);
       handle_upgrade(std::move(breq), *req);
       return;
     }
@@ -408,6 +409,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     auto m = impl_->router.match(req->method, segments);
     if (m.kind == Router::Match::Kind::Found) {
       req->params = std::move(m.params);
+      req->route = std::move(m.pattern);
       if (auto denied = authorize(*req)) {
         send(std::move(*denied));
         return;
@@ -447,10 +449,12 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     send(Response::problem(404, "no such resource: " + req->path));
   }
 
-  std::optional<Response> authorize(const Request& req) {
+  std::optional<Response> authorize(Request& req) {
     if (!impl_->authorizer) return std::nullopt;
     try {
-      return impl_->authorizer(req);
+      auto denied = impl_->authorizer(req);
+      req.authorized = !denied;
+      return denied;
     } catch (const std::exception& e) {
       impl_->debug(std::string("authorizer threw: ") + e.what());
       return Response::problem(500, "authorization failed");
@@ -495,7 +499,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     return iequals(u->encoded_host_and_port(), host->value());
   }
 
-  void handle_upgrade(BeastRequest&& breq, const Request& req) {
+  void handle_upgrade(BeastRequest&& breq, Request& req) {
     keep_alive_ = false;  // any answer but 101 ends the connection
     if (!origin_allowed(breq)) {
       send(Response::problem(403, "origin not allowed"));
@@ -796,6 +800,8 @@ void HttpServer::add_route(std::string method, std::string_view pattern, Handler
   if (pattern == kEventsPath) throw std::invalid_argument("route " + std::string(pattern) + " is the event stream's");
   impl_->router.add(std::move(method), pattern, std::move(handler));
 }
+
+std::vector<std::pair<std::string, std::string>> HttpServer::routes() const { return impl_->router.list(); }
 
 void HttpServer::set_authorizer(Authorizer authorizer) { impl_->authorizer = std::move(authorizer); }
 

@@ -7,6 +7,7 @@
 #include <boost/json.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstdint>
 #include <mutex>
@@ -23,6 +24,16 @@ namespace json = boost::json;
 
 void* to_context(std::uint64_t v) { return reinterpret_cast<void*>(static_cast<std::uintptr_t>(v)); }
 std::uint64_t from_context(void* p) { return static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(p)); }
+
+// "Bearer abc" -> "abc"; a bare token stays as it is.
+std::string_view strip_bearer(std::string_view v) {
+  constexpr std::string_view kBearer = "Bearer ";
+  if (v.size() >= kBearer.size() && std::equal(kBearer.begin(), kBearer.end(), v.begin(), [](char a, char b) {
+        return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+      }))
+    v.remove_prefix(kBearer.size());
+  return v;
+}
 
 std::vector<std::string_view> split(std::string_view s, char sep) {
   std::vector<std::string_view> out;
@@ -511,6 +522,12 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
         if (props.contains(::mqtt::property::CORRELATION_DATA))
           addr.correlation = ::mqtt::get<std::string>(props, ::mqtt::property::CORRELATION_DATA);
       }
+      // MQTT 5 user property "authorization": "Bearer <token>" (or the token).
+      const auto n_user = props.count(::mqtt::property::USER_PROPERTY);
+      for (std::size_t i = 0; i < n_user; ++i) {
+        auto [name, value] = ::mqtt::get<::mqtt::string_pair>(props, ::mqtt::property::USER_PROPERTY, i);
+        if (name == "authorization") req.token = std::string(strip_bearer(value));
+      }
       if (props.contains(::mqtt::property::CONTENT_TYPE) &&
           ::mqtt::get<std::string>(props, ::mqtt::property::CONTENT_TYPE) == "application/x-protobuf")
         req.protobuf = true;
@@ -532,6 +549,11 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
         if (auto* c = o.if_contains("correlationId")) {
           if (!addr.v5) addr.corr_id = *c;
           o.erase("correlationId");
+          changed = true;
+        }
+        if (auto* t = o.if_contains("token")) {
+          if (t->is_string() && req.token.empty()) req.token = std::string(strip_bearer(t->as_string()));
+          o.erase("token");
           changed = true;
         }
         if (changed) req.body = json::serialize(o);

@@ -342,6 +342,14 @@ void get_emcy(App& app, const Request& req, Responder respond) {
 }
 
 // SDO read/write: the path's index/sub (and ?type=) go into the body App understands.
+// The caller as the HTTP authorizer established it. Without an authorizer
+// the server is open, and the request is too.
+void caller(const Request& req, ApiRequest& api) {
+  api.authenticated = true;
+  api.who = req.who;
+  api.role = req.authorized ? static_cast<Role>(req.role) : Role::Admin;
+}
+
 void sdo(App& app, bool write, const Request& req, Responder respond) {
   const bool reply_proto = accepts_protobuf(req) || sends_protobuf(req);
   std::uint32_t net = 0;
@@ -369,6 +377,7 @@ void sdo(App& app, bool write, const Request& req, Responder respond) {
   api.network = net;
   api.node = node;
   api.protobuf = reply_proto;
+  caller(req, api);
   if (!write) {
     if (reply_proto) {
       canopen::gateway::v1::SdoReadRequest m;
@@ -426,6 +435,7 @@ void nmt(App& app, const Request& req, Responder respond) {
   api.network = net;
   api.node = node;
   api.protobuf = proto;
+  caller(req, api);
   api.body = req.body;
   app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
 }

@@ -260,19 +260,39 @@ TEST(Config, NothingToRunIsAnError) {
               HasSubstr("gw.yaml: networks: no network configured"));
 }
 
-TEST(Config, AnOpenListenerNeedsTokens) {
+TEST(Config, AnOpenListenerNeedsTokensAndTls) {
   CliOptions cli;
   cli.can_interfaces = {"can0"};
   cli.http = "0.0.0.0:8080";
-  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("http.listen: 0.0.0.0 is not loopback"));
-  // Tokens alone do not open it: this version does not check them yet.
-  EXPECT_THAT(merge_error(parse_config("http:\n  tokens:\n    - {name: a, role: admin, sha256: "
-                                       "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n",
-                                       "gw.yaml"),
-                          cli),
-              HasSubstr("does not check tokens yet"));
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("http.tokens: none configured, and http.listen 0.0.0.0"));
+  const std::string tokens =
+      "http:\n  tokens:\n    - {name: a, role: admin, sha256: "
+      "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n";
+  // Tokens over plain HTTP off loopback: only when asked for.
+  EXPECT_THAT(merge_error(parse_config(tokens, "gw.yaml"), cli), HasSubstr("http.tls: http.listen 0.0.0.0"));
+  EXPECT_NO_THROW(merge(parse_config(tokens + "  plain-http: true\n", "gw.yaml"), cli));
   Config open = parse_config("http: {auth: false}\n", "gw.yaml");
   EXPECT_NO_THROW(merge(open, cli));
+}
+
+TEST(Config, RolesOfCallersWithoutToken) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  // Loopback without tokens: local callers are trusted (as before tokens).
+  EXPECT_EQ(merge(Config{}, cli).http.anonymous_role(), Role::Admin);
+  Config with = merge(parse_config("http:\n  tokens:\n    - {name: a, role: viewer, sha256: "
+                                   "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n"
+                                   "  rate-limit: {requests-per-second: 5, burst: 10}\n"
+                                   "mqtt: {uri: tcp://b:1883, requests-role: viewer}\n",
+                                   "gw.yaml"),
+                      cli);
+  EXPECT_EQ(with.http.anonymous_role(), Role::None);
+  EXPECT_EQ(with.mqtt.requests_role, Role::Viewer);
+  EXPECT_EQ(with.http.rate_limit, 5.0);
+  EXPECT_EQ(with.http.rate_burst, 10.0);
+  EXPECT_THAT(config_error("mqtt: {uri: tcp://b:1883, requests-role: root}\n"),
+              HasSubstr("mqtt.requests-role: 'root' is not viewer, operator or admin or none"));
+  EXPECT_THAT(config_error("http: {rate-limit: {per-minute: 3}}\n"), HasSubstr("per-minute"));
 }
 
 TEST(Config, LoadConfigReadsTheFile) {

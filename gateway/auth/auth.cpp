@@ -1,0 +1,208 @@
+#include "auth.hpp"
+
+#include <openssl/crypto.h>
+#include <openssl/evp.h>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <memory>
+
+#include "log.hpp"
+
+namespace gateway::auth {
+
+namespace {
+
+bool iequals_prefix(std::string_view s, std::string_view prefix) {
+  return s.size() >= prefix.size() &&
+         std::equal(prefix.begin(), prefix.end(), s.begin(), [](char a, char b) {
+           return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
+         });
+}
+
+// Route patterns by the role they need (see auth.hpp); GET of anything
+// not listed is viewer.
+struct RouteRole {
+  std::string_view method, route;
+  Role role;
+};
+constexpr RouteRole kRouteRoles[] = {
+    {"GET", "", Role::None},  // dashboard files
+    {"GET", "/api/v1/openapi.json", Role::None},
+    {"PUT", "/api/v1/networks/{net}/nodes/{node}/sdo/{index}/{sub}", Role::Operator},
+    {"POST", "/api/v1/networks/{net}/nodes/{node}/nmt", Role::Operator},
+    {"PUT", "/api/v1/networks/{net}/nodes/{node}/rpdo/{n}", Role::Operator},
+    {"POST", "/api/v1/networks/{net}/sync", Role::Operator},
+};
+
+std::string audit_target(const http::Request& req) { return req.method + " " + req.path; }
+
+}  // namespace
+
+std::string sha256_hex(std::string_view data) {
+  std::array<unsigned char, EVP_MAX_MD_SIZE> md{};
+  unsigned int len = 0;
+  EVP_Digest(data.data(), data.size(), md.data(), &len, EVP_sha256(), nullptr);
+  static constexpr char kHex[] = "0123456789abcdef";
+  std::string out;
+  out.reserve(2 * len);
+  for (unsigned i = 0; i < len; ++i) {
+    out.push_back(kHex[md[i] >> 4]);
+    out.push_back(kHex[md[i] & 0xF]);
+  }
+  return out;
+}
+
+TokenStore::TokenStore(std::vector<TokenEntry> tokens) : tokens_(std::move(tokens)) {
+  for (auto& t : tokens_)
+    std::transform(t.sha256.begin(), t.sha256.end(), t.sha256.begin(),
+                   [](char c) { return static_cast<char>(std::tolower(static_cast<unsigned char>(c))); });
+}
+
+std::optional<Principal> TokenStore::find(std::string_view token) const {
+  if (token.empty()) return std::nullopt;
+  const std::string h = sha256_hex(token);
+  const TokenEntry* hit = nullptr;
+  for (const auto& t : tokens_) {
+    // Every entry is compared in full (no early exit), constant time each.
+    const bool same = t.sha256.size() == h.size() && CRYPTO_memcmp(t.sha256.data(), h.data(), h.size()) == 0;
+    if (same && hit == nullptr) hit = &t;
+  }
+  if (hit == nullptr) return std::nullopt;
+  return Principal{hit->name, hit->role};
+}
+
+Role required_role(std::string_view method, std::string_view route) {
+  const std::string_view m = method == "HEAD" ? std::string_view("GET") : method;
+  for (const auto& r : kRouteRoles)
+    if (r.method == m && r.route == route) return r.role;
+  return m == "GET" ? Role::Viewer : Role::Admin;
+}
+
+Role required_role(RequestKind kind, std::uint8_t nmt_command) {
+  switch (kind) {
+    case RequestKind::SdoRead:
+      return Role::Viewer;
+    case RequestKind::SdoWrite:
+      return Role::Operator;
+    case RequestKind::Nmt:
+      // 0x81 reset node, 0x82 reset communication (CiA 301 7.2.8.3.1).
+      return nmt_command == 0x81 || nmt_command == 0x82 ? Role::Admin : Role::Operator;
+  }
+  return Role::Admin;
+}
+
+bool RateLimiter::allow(std::string_view client, Clock::time_point now) {
+  if (rate_ <= 0) return true;
+  // Forget buckets that have refilled completely: they behave like new ones.
+  const auto full_after = std::chrono::duration<double>(burst_ / rate_);
+  if (now - last_prune_ > std::chrono::seconds(10)) {
+    last_prune_ = now;
+    for (auto it = buckets_.begin(); it != buckets_.end();)
+      it = now - it->second.last > full_after ? buckets_.erase(it) : std::next(it);
+  }
+  auto [it, fresh] = buckets_.try_emplace(std::string(client));
+  Bucket& b = it->second;
+  if (fresh) {
+    b.tokens = burst_;
+  } else {
+    const double dt = std::chrono::duration<double>(now - b.last).count();
+    b.tokens = std::min(burst_, b.tokens + std::max(0.0, dt) * rate_);
+  }
+  b.last = now;
+  if (b.tokens < 1) return false;
+  b.tokens -= 1;
+  return true;
+}
+
+std::string_view peer_address(std::string_view peer) {
+  if (!peer.empty() && peer.front() == '[') {
+    const auto close = peer.find(']');
+    return close == std::string_view::npos ? peer : peer.substr(1, close - 1);
+  }
+  const auto colon = peer.rfind(':');
+  return colon == std::string_view::npos ? peer : peer.substr(0, colon);
+}
+
+std::optional<std::string> bearer_token(const http::Request& req) {
+  if (auto h = req.header("authorization")) {
+    std::string_view v = *h;
+    constexpr std::string_view kBearer = "Bearer ";
+    if (!iequals_prefix(v, kBearer)) return std::string();  // another scheme: no usable token
+    v.remove_prefix(kBearer.size());
+    while (!v.empty() && v.front() == ' ') v.remove_prefix(1);
+    while (!v.empty() && v.back() == ' ') v.remove_suffix(1);
+    return std::string(v);
+  }
+  if (req.route == "/api/v1/events")
+    if (auto q = req.query_param("access_token")) return std::string(*q);
+  return std::nullopt;
+}
+
+http::Authorizer make_http_authorizer(HttpAuthSettings settings, const TokenStore& tokens, Logger& log) {
+  auto limiter = std::make_shared<RateLimiter>(settings.rate_limit, settings.rate_burst);
+  return [settings, &tokens, &log, limiter](http::Request& req) -> std::optional<http::Response> {
+    const std::string_view address = peer_address(req.peer);
+    const Role need = required_role(req.method, req.route);
+    if (need != Role::None && !limiter->allow(address, RateLimiter::Clock::now())) {
+      auto r = http::Response::problem(429, "too many requests from " + std::string(address) + "; slow down");
+      r.headers.emplace_back("Retry-After", "1");
+      return r;
+    }
+    if (!settings.enabled) {
+      req.role = static_cast<std::uint8_t>(Role::Admin);
+      return std::nullopt;
+    }
+    Role role = settings.anonymous;
+    req.who = "anonymous@" + std::string(address);
+    auto deny = [&](int status, const std::string& detail) {
+      log.info("audit: auth failure: " + req.who + ": " + audit_target(req) + ": " + std::to_string(status) + " " +
+               detail);
+      log.flush();
+      auto r = http::Response::problem(status, detail);
+      if (status == 401) r.headers.emplace_back("WWW-Authenticate", "Bearer realm=\"canopen-gateway\"");
+      return r;
+    };
+    if (auto token = bearer_token(req)) {
+      auto p = tokens.find(*token);
+      if (!p) return deny(401, "the bearer token is not valid");
+      req.who = p->name + "@" + std::string(address);
+      role = p->role;
+    }
+    req.role = static_cast<std::uint8_t>(role);
+    if (allows(role, need)) return std::nullopt;
+    if (role == Role::None) return deny(401, "this needs a bearer token (Authorization: Bearer <token>)");
+    return deny(403, "role " + std::string(to_string(role)) + " may not " + audit_target(req) + " (needs " +
+                         std::string(to_string(need)) + ")");
+  };
+}
+
+std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role anonymous) {
+  if (req.authenticated) return std::nullopt;
+  if (req.token.empty()) {
+    req.role = anonymous;
+    if (req.who.empty()) req.who = "anonymous";
+    return std::nullopt;
+  }
+  auto p = tokens.find(req.token);
+  req.token.clear();  // not kept around once checked
+  if (!p) {
+    req.role = Role::None;
+    return Denial{401, "the token is not valid"};
+  }
+  req.who = p->name + (req.who.empty() ? std::string() : "@" + req.who);
+  req.role = p->role;
+  return std::nullopt;
+}
+
+std::optional<Denial> check_role(const ApiRequest& req, Role need) {
+  if (allows(req.role, need)) return std::nullopt;
+  if (req.role == Role::None)
+    return Denial{401, "this request needs a token (MQTT 5 user property \"authorization\", or \"token\" in the body)"};
+  return Denial{403, "role " + std::string(to_string(req.role)) + " may not do this (needs " +
+                         std::string(to_string(need)) + ")"};
+}
+
+}  // namespace gateway::auth
