@@ -1,5 +1,6 @@
 #include "app.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <set>
@@ -653,7 +654,8 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
   r.index = index;
   r.sub = sub;
   ++counters_.sdo_requests;
-  r.on_done = [this, type, opts, reply](canopen::sdo::TransferResult&& res) {
+  r.on_done = [this, type, opts, reply, t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
+    sdo_finished(t0);
     if (!res.ok()) {
       reply(transfer_failed(res, opts));
       return;
@@ -724,7 +726,9 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   r.node = req.node;
   r.index = index;
   r.sub = sub;
-  r.on_done = [this, opts, reply, written, audit](canopen::sdo::TransferResult&& res) {
+  r.on_done = [this, opts, reply, written, audit,
+               t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
+    sdo_finished(t0);
     if (!res.ok()) {
       log_.info("audit: " + audit + ": " + res.error.message());
       reply(transfer_failed(res, opts));
@@ -735,6 +739,15 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   };
   submitted(n, n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now()), req.node,
             opts, reply);
+}
+
+void App::sdo_finished(std::chrono::steady_clock::time_point submitted_at) {
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted_at).count();
+  const auto& bounds = Counters::kSdoLatencyBounds;
+  const auto slot = static_cast<std::size_t>(std::lower_bound(bounds.begin(), bounds.end(), s) - bounds.begin());
+  ++counters_.sdo_latency_counts[slot];
+  counters_.sdo_latency_sum += s;
+  ++counters_.sdo_latency_count;
 }
 
 ApiReply App::transfer_failed(const canopen::sdo::TransferResult& res, const ReplyOptions& opts) {

@@ -8,6 +8,7 @@
 // constructor; call every method from that thread.
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <cstdint>
 #include <functional>
@@ -116,6 +117,14 @@ class App {
     std::uint64_t sdo_timeouts = 0;
     std::uint64_t nmt_commands = 0;
     std::uint64_t auth_failures = 0;  // requests refused with 401/403 here (MQTT, NMT resets)
+    // SDO transfers on the bus, submit to result (queueing included), as a
+    // Prometheus histogram: count per upper bound (seconds; not cumulative),
+    // the last slot for slower ones.
+    static constexpr std::array<double, 12> kSdoLatencyBounds = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025,
+                                                                 0.05,   0.1,   0.25,   0.5,   1.0,  2.5};
+    std::array<std::uint64_t, kSdoLatencyBounds.size() + 1> sdo_latency_counts{};
+    double sdo_latency_sum = 0;  // seconds
+    std::uint64_t sdo_latency_count = 0;
   };
   const Counters& counters() const { return counters_; }
 
@@ -133,6 +142,8 @@ class App {
   // `need`; nullopt when it may.
   std::optional<ApiReply> refused(const Net& net, const ApiRequest& req, Role need, std::string_view what,
                                   const ReplyOptions& opts);
+  // Records one finished SDO transfer's latency.
+  void sdo_finished(std::chrono::steady_clock::time_point submitted_at);
   // A failed SDO transfer: counted, and turned into its reply (422/504/502).
   ApiReply transfer_failed(const canopen::sdo::TransferResult& res, const ReplyOptions& opts);
   // After submitting an SDO transfer: 429 when the node's queue was full,

@@ -253,6 +253,36 @@ TEST_F(MqttPublisherTest, RequestOverMqtt311WithReplyToInBody) {
   EXPECT_EQ(reqs[1].node, 9);
 }
 
+// The request's token reaches the handler (which checks it, see
+// gateway/auth) and leaves the body: MQTT 5 user property "authorization",
+// or "token" in a JSON body (3.1.1).
+TEST_F(MqttPublisherTest, RequestTokenFromUserPropertyOrBody) {
+  start_broker();
+  start_publisher(config());
+  Subscriber v5(broker_->uri(), "token5", {"replies/t5"}, {MQTTVERSION_5, true});
+  ASSERT_TRUE(v5.connect());
+  auto msg = ::mqtt::make_message("canopen/gw1/1/5/sdo/read", R"({"index":"1017","subIndex":0})", 1, false);
+  msg->set_properties({::mqtt::property(::mqtt::property::RESPONSE_TOPIC, "replies/t5"),
+                       ::mqtt::property(::mqtt::property::USER_PROPERTY, "authorization", "Bearer s3cret")});
+  v5.client().publish(msg)->wait_for(5s);
+  ASSERT_TRUE(v5.wait_count(1, 10s));
+
+  Subscriber v3(broker_->uri(), "token3", {"replies/t3"}, {});
+  ASSERT_TRUE(v3.connect());
+  v3.client()
+      .publish(::mqtt::make_message("canopen/gw1/1/5/nmt", R"({"command":"stop","token":"other","replyTo":"replies/t3"})",
+                                    1, false))
+      ->wait_for(5s);
+  ASSERT_TRUE(v3.wait_count(1, 10s));
+
+  auto reqs = io_.call([&] { return requests_; });
+  ASSERT_EQ(reqs.size(), 2u);
+  EXPECT_EQ(reqs[0].token, "s3cret");
+  EXPECT_FALSE(reqs[0].authenticated);  // the handler must check it
+  EXPECT_EQ(reqs[1].token, "other");
+  EXPECT_EQ(reqs[1].body, R"({"command":"stop"})");
+}
+
 TEST_F(MqttPublisherTest, BadRequestsAreAnsweredOrLoggedNeverCrash) {
   start_broker();
   start_publisher(config());

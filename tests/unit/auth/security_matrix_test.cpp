@@ -1,0 +1,290 @@
+// Security of the API (issue 6): every route x {no token, viewer, operator,
+// admin} against the whole gateway on the simulated demo network, over real
+// HTTP on 127.0.0.1; audit lines for writes and refusals; the same roles
+// for requests that arrive without HTTP (MQTT); the per-client rate limit.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <future>
+#include <map>
+#include <thread>
+
+#include "auth.hpp"
+#include "rest_api.hpp"
+#include "unit/support/http_fetch.hpp"
+
+namespace gateway {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+using testing::HttpReply;
+
+const std::map<Role, std::string> kTokens = {
+    {Role::Viewer, "viewer-secret"}, {Role::Operator, "operator-secret"}, {Role::Admin, "admin-secret"}};
+
+// The role each route must need, written down here independently of
+// auth.cpp's table: a route added without a decision here fails the test.
+struct Expect {
+  Role need;
+  std::string body;  // a valid body, so an allowed request succeeds
+};
+const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
+    {{"GET", "/api/v1/gateway"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/nodes"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/sdo/{index}/{sub}"}, {Role::Viewer, ""}},
+    {{"PUT", "/api/v1/networks/{net}/nodes/{node}/sdo/{index}/{sub}"}, {Role::Operator, R"({"value":1000})"}},
+    {{"POST", "/api/v1/networks/{net}/nodes/{node}/nmt"}, {Role::Operator, R"({"command":"start"})"}},
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/od"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/emcy"}, {Role::Viewer, ""}},
+    {{"PUT", "/api/v1/networks/{net}/nodes/{node}/rpdo/{n}"}, {Role::Operator, R"({"raw":"0f00"})"}},
+    {{"POST", "/api/v1/networks/{net}/sync"}, {Role::Operator, "{}"}},
+    {{"GET", "/api/v1/openapi.json"}, {Role::None, ""}},
+    {{"GET", "/metrics"}, {Role::Viewer, ""}},
+};
+
+// Pattern -> a concrete path on the demo network (node 5, heartbeat 1017h).
+std::string concrete(std::string pattern) {
+  const std::pair<const char*, const char*> subst[] = {
+      {"{net}", "1"}, {"{node}", "5"}, {"{index}", "1017"}, {"{sub}", "0"}, {"{n}", "1"}};
+  for (auto [from, to] : subst)
+    if (auto p = pattern.find(from); p != std::string::npos) pattern.replace(p, std::string(from).size(), to);
+  return pattern;
+}
+
+struct SecureRig {
+  explicit SecureRig(double rate_limit = 0, double burst = 1) {
+    CliOptions cli;
+    cli.demo = true;
+    cli.gateway_id = "test";
+    Config c = merge(Config{}, cli);
+    c.http.auth = true;  // the demo turns it off; this is the production setting
+    for (const auto& [role, token] : kTokens)
+      c.http.tokens.push_back({std::string(to_string(role)), role, auth::sha256_hex(token)});
+    c.mqtt.requests_role = Role::None;
+    log_file = open_memstream(&log_buf, &log_len);
+    log = std::make_unique<Logger>(LogLevel::Info, log_file);
+    app = std::make_unique<App>(io, c, *log);
+    http::HttpConfig hc;
+    hc.address = "127.0.0.1";
+    hc.port = 0;
+    web = std::filesystem::temp_directory_path() / ("auth-web-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(web);
+    std::ofstream(web / "index.html") << "<!doctype html><title>dashboard</title>";
+    hc.static_dir = web;
+    server = std::make_unique<http::HttpServer>(io, hc);
+    auth::HttpAuthSettings s;
+    s.enabled = true;
+    s.anonymous = c.http.anonymous_role();
+    s.rate_limit = rate_limit;
+    s.rate_burst = burst;
+    server->set_authorizer(auth::make_http_authorizer(s, app->tokens(), *log));
+    register_rest_routes(*server, *app);  // TODO(lead): register_api_routes once it exists
+    app->start();
+    server->start();
+    port = server->bound_port();
+    EXPECT_TRUE(run_until([&] { return operational(5); })) << "node 5 did not start";
+  }
+  ~SecureRig() {
+    server->stop();
+    app->stop();
+    io.run_for(50ms);
+    log.reset();
+    std::fclose(log_file);
+    std::free(log_buf);
+    std::filesystem::remove_all(web);
+  }
+
+  bool operational(std::uint8_t node) const {
+    const auto* n = app->cache().node(1, node);
+    return n != nullptr && n->state == canopen::NmtState::Operational;
+  }
+
+  template <typename Pred>
+  bool run_until(Pred pred, std::chrono::milliseconds limit = 10s) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (!pred() && std::chrono::steady_clock::now() < end) io.run_for(5ms);
+    return pred();
+  }
+
+  HttpReply request(const std::string& method, const std::string& target, const std::string& body,
+                    std::vector<std::string> headers) {
+    if (!body.empty()) headers.push_back("Content-Type: application/json");
+    auto f = std::async(std::launch::async, testing::fetch, port, method, target, body, headers);
+    auto ready = [&] { return f.wait_for(0s) == std::future_status::ready; };
+    if (!run_until(ready, 10s)) {
+      ADD_FAILURE() << method << " " << target << ": no answer";
+      server->stop();
+      run_until(ready, 5s);
+      return {};
+    }
+    return f.get();
+  }
+  HttpReply as(std::optional<Role> role, const std::string& method, const std::string& target,
+               const std::string& body = {}, std::vector<std::string> headers = {}) {
+    if (role) headers.push_back("Authorization: Bearer " + kTokens.at(*role));
+    return request(method, target, body, std::move(headers));
+  }
+
+  std::string log_text() {
+    log->flush();
+    std::fflush(log_file);
+    return std::string(log_buf, log_len);
+  }
+
+  boost::asio::io_context io;
+  char* log_buf = nullptr;
+  std::size_t log_len = 0;
+  std::FILE* log_file = nullptr;
+  std::unique_ptr<Logger> log;
+  std::unique_ptr<App> app;
+  std::unique_ptr<http::HttpServer> server;
+  std::filesystem::path web;
+  std::uint16_t port = 0;
+};
+
+const std::vector<std::string> kUpgrade = {"Upgrade: websocket", "Connection: Upgrade",
+                                           "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==",
+                                           "Sec-WebSocket-Version: 13"};
+
+std::string who(std::optional<Role> r) { return r ? std::string(to_string(*r)) : std::string("no token"); }
+
+TEST(SecurityMatrix, EveryRouteByRole) {
+  SecureRig rig;
+  auto routes = rig.server->routes();
+  routes.emplace_back("GET", "/api/v1/events");  // the server's own WebSocket path
+  routes.emplace_back("GET", "/");               // the dashboard
+  ASSERT_GE(routes.size(), 13U);
+  const std::optional<Role> callers[] = {std::nullopt, Role::Viewer, Role::Operator, Role::Admin};
+  for (const auto& [method, pattern] : routes) {
+    Expect e{Role::None, ""};
+    if (pattern == "/api/v1/events") {
+      e.need = Role::Viewer;
+    } else if (pattern != "/") {
+      auto it = kMatrix.find({method, pattern});
+      ASSERT_NE(it, kMatrix.end()) << method << " " << pattern << " has no expected role in this test";
+      e = it->second;
+    }
+    const std::string path = concrete(pattern);
+    for (const auto& caller : callers) {
+      SCOPED_TRACE(method + " " + path + " as " + who(caller));
+      const bool allowed = e.need == Role::None || (caller && allows(*caller, e.need));
+      HttpReply r = pattern == "/api/v1/events" ? rig.as(caller, method, path, {}, kUpgrade)
+                                                : rig.as(caller, method, path, e.body);
+      if (allowed) {
+        if (pattern == "/api/v1/events")
+          EXPECT_EQ(r.status, 101) << r.body;
+        else
+          EXPECT_TRUE(r.status >= 200 && r.status < 300) << r.status << " " << r.body;
+      } else if (!caller) {
+        EXPECT_EQ(r.status, 401) << r.body;
+        EXPECT_TRUE(r.has_header("www-authenticate: bearer")) << r.head;
+        EXPECT_EQ(r.content_type, "application/problem+json");
+      } else {
+        EXPECT_EQ(r.status, 403) << r.body;
+        EXPECT_THAT(r.body, HasSubstr("needs " + std::string(to_string(e.need))));
+      }
+    }
+  }
+}
+
+TEST(SecurityMatrix, BadTokensAndTheWebSocketQueryToken) {
+  SecureRig rig;
+  const std::string nodes = "/api/v1/networks/1/nodes";
+  EXPECT_EQ(rig.request("GET", nodes, {}, {"Authorization: Bearer nope"}).status, 401);
+  EXPECT_EQ(rig.request("GET", nodes, {}, {"Authorization: Basic dXNlcjpwYXNz"}).status, 401);
+  // ?access_token= is for the WebSocket only (browsers cannot set its headers).
+  EXPECT_EQ(rig.request("GET", nodes + "?access_token=viewer-secret", {}, {}).status, 401);
+  EXPECT_EQ(rig.request("GET", "/api/v1/events?access_token=viewer-secret", {}, kUpgrade).status, 101);
+  EXPECT_EQ(rig.request("GET", "/api/v1/events?access_token=wrong", {}, kUpgrade).status, 401);
+  const auto log = rig.log_text();
+  EXPECT_THAT(log, HasSubstr("audit: auth failure: anonymous@127.0.0.1: GET /api/v1/networks/1/nodes: 401 the bearer "
+                             "token is not valid"));
+  EXPECT_THAT(log, HasSubstr("audit: auth failure: anonymous@127.0.0.1: GET /api/v1/events: 401"));
+  EXPECT_EQ(log.find("viewer-secret"), std::string::npos) << "a token must never reach the log";
+}
+
+TEST(SecurityMatrix, NmtResetsNeedAdminAndEveryWriteIsAudited) {
+  SecureRig rig;
+  const std::string nmt = "/api/v1/networks/1/nodes/5/nmt";
+  auto r = rig.as(Role::Operator, "POST", nmt, R"({"command":"reset-node"})");
+  EXPECT_EQ(r.status, 403) << r.body;
+  EXPECT_THAT(r.body, HasSubstr("needs admin"));
+  EXPECT_EQ(rig.as(Role::Operator, "POST", nmt, R"({"command":"reset-comm"})").status, 403);
+  EXPECT_EQ(rig.as(Role::Operator, "POST", nmt, R"({"command":"stop"})").status, 200);
+  EXPECT_EQ(rig.as(Role::Admin, "POST", nmt, R"({"command":"reset-comm"})").status, 200);
+  EXPECT_EQ(rig.as(Role::Operator, "PUT", "/api/v1/networks/1/nodes/5/sdo/1017/0", R"({"value":1000})").status, 200);
+  EXPECT_EQ(rig.as(Role::Viewer, "PUT", "/api/v1/networks/1/nodes/5/sdo/1017/0", R"({"value":900})").status, 403);
+
+  const auto log = rig.log_text();
+  // UTC time, who, target, result on each line.
+  EXPECT_THAT(log, HasSubstr("audit: auth failure: operator@127.0.0.1: NMT reset-node net 1 node 5: 403"));
+  EXPECT_THAT(log, HasSubstr("audit: NMT stop by operator@127.0.0.1: net 1 node 5: sent"));
+  EXPECT_THAT(log, HasSubstr("audit: NMT reset-comm by admin@127.0.0.1: net 1 node 5: sent"));
+  EXPECT_THAT(log, HasSubstr("audit: SDO write by operator@127.0.0.1: net 1 node 5 1017h sub 0 = 1000: ok"));
+  EXPECT_THAT(log, HasSubstr("audit: auth failure: viewer@127.0.0.1: PUT /api/v1/networks/1/nodes/5/sdo/1017/0: 403"));
+  for (std::size_t p = log.find("audit:"); p != std::string::npos; p = log.find("audit:", p + 1)) {
+    const auto line_start = log.rfind('\n', p) == std::string::npos ? 0 : log.rfind('\n', p) + 1;
+    const auto line = log.substr(line_start, p - line_start);
+    EXPECT_TRUE(line.size() >= 20 && line[4] == '-' && line.find('T') == 10 && line.find('Z') != std::string::npos)
+        << "audit line without a UTC time stamp: " << line;
+  }
+}
+
+// Requests that did not come through HTTP (MQTT) carry their token; the
+// App checks it with the same roles.
+TEST(SecurityMatrix, RequestsWithoutHttpUseTheirTokenAndTheSameRoles) {
+  SecureRig rig;
+  auto call = [&](RequestKind kind, std::string token, std::string body, std::uint8_t node = 5) {
+    ApiRequest req;
+    req.kind = kind;
+    req.network = 1;
+    req.node = node;
+    req.body = std::move(body);
+    req.token = std::move(token);
+    req.who = "mqtt";
+    std::optional<ApiReply> got;
+    rig.app->handle_request(req, [&](ApiReply r) { got = std::move(r); });
+    EXPECT_TRUE(rig.run_until([&] { return got.has_value(); }));
+    return got.value_or(ApiReply{0, {}, {}});
+  };
+  const std::string read = R"({"index":"1017","subIndex":0})";
+  EXPECT_EQ(call(RequestKind::SdoRead, "", read).status, 401);  // requests-role none: a token is required
+  EXPECT_EQ(call(RequestKind::SdoRead, "wrong", read).status, 401);
+  EXPECT_EQ(call(RequestKind::SdoRead, "viewer-secret", read).status, 200);
+  const std::string write = R"({"index":"1017","subIndex":0,"value":1000})";
+  EXPECT_EQ(call(RequestKind::SdoWrite, "viewer-secret", write).status, 403);
+  EXPECT_EQ(call(RequestKind::SdoWrite, "operator-secret", write).status, 200);
+  EXPECT_EQ(call(RequestKind::Nmt, "operator-secret", R"({"command":"reset-node"})", 0).status, 403);
+  EXPECT_EQ(call(RequestKind::Nmt, "admin-secret", R"({"command":"start"})", 0).status, 200);
+  const auto log = rig.log_text();
+  EXPECT_THAT(log, HasSubstr("audit: auth failure: mqtt: request to net 1 node 5: 401 the token is not valid"));
+  EXPECT_THAT(log, HasSubstr("audit: auth failure: viewer@mqtt: SDO write net 1 node 5: 403"));
+  EXPECT_THAT(log, HasSubstr("audit: SDO write by operator@mqtt: net 1 node 5 1017h sub 0 = 1000: ok"));
+  EXPECT_THAT(log, HasSubstr("audit: NMT start by admin@mqtt: net 1 node 0: sent"));
+}
+
+TEST(SecurityMatrix, RateLimitPerClientAnswers429ButNotForPublicFiles) {
+  SecureRig rig(2, 3);  // 2/s, bursts of 3
+  int ok = 0, limited = 0;
+  HttpReply last;
+  for (int i = 0; i < 6; ++i) {
+    last = rig.as(Role::Viewer, "GET", "/api/v1/gateway");
+    (last.status == 200 ? ok : limited) += 1;
+    if (last.status == 429) break;
+  }
+  EXPECT_GE(ok, 3);
+  EXPECT_EQ(last.status, 429);
+  EXPECT_TRUE(last.has_header("retry-after: 1")) << last.head;
+  EXPECT_EQ(rig.as(std::nullopt, "GET", "/").status, 200);  // the dashboard still loads
+  std::this_thread::sleep_for(600ms);                        // a token refills in 500 ms
+  EXPECT_EQ(rig.as(Role::Viewer, "GET", "/api/v1/gateway").status, 200);
+}
+
+}  // namespace
+}  // namespace gateway
