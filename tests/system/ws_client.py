@@ -5,10 +5,13 @@ filter as a text message, prints COUNT event messages (one JSON per line) and
 exits 0; exits 1 on a handshake failure or when nothing comes for 15 s.
 
 usage: ws_client.py HOST PORT FILTER_JSON COUNT [PATH]
+With WS_CA=<PEM file> in the environment it speaks TLS (wss://), checking
+the server's certificate against that CA.
 """
 import base64
 import os
 import socket
+import ssl
 import struct
 import sys
 
@@ -53,6 +56,9 @@ def main():
     host, port, filt, count = sys.argv[1], int(sys.argv[2]), sys.argv[3], int(sys.argv[4])
     path = sys.argv[5] if len(sys.argv) > 5 else "/api/v1/events"
     sock = socket.create_connection((host, port), timeout=15)
+    if os.environ.get("WS_CA"):
+        ctx = ssl.create_default_context(cafile=os.environ["WS_CA"])
+        sock = ctx.wrap_socket(sock, server_hostname=host)
     key = base64.b64encode(os.urandom(16)).decode()
     sock.sendall((f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\n"
                   f"Connection: Upgrade\r\nSec-WebSocket-Key: {key}\r\nSec-WebSocket-Version: 13\r\n\r\n").encode())
