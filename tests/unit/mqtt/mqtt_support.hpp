@@ -88,6 +88,10 @@ class Broker {
   ~Broker() { stop(); }
 
   int port() const { return port_; }
+  // Lines appended to mosquitto.conf (after the listener, so listener
+  // options such as certfile apply to it), e.g. TLS or a password file.
+  std::string extra_conf;
+  bool allow_anonymous = true;
   std::string uri() const { return "tcp://127.0.0.1:" + std::to_string(port_); }
 
   bool start() {
@@ -96,12 +100,13 @@ class Broker {
       std::ofstream f(conf);
       const passwd* pw = ::getpwuid(::getuid());
       f << "listener " << port_ << " 127.0.0.1\n"
-        << "allow_anonymous true\n"
+        << "allow_anonymous " << (allow_anonymous ? "true" : "false") << "\n"
         << "persistence " << (persistence_ ? "true" : "false") << "\n"
         << "persistence_location " << dir_.path().string() << "/\n"
         << "autosave_interval 0\n"
         << "max_queued_messages 100000\n"
-        << "user " << (pw != nullptr ? pw->pw_name : "root") << "\n";
+        << "user " << (pw != nullptr ? pw->pw_name : "root") << "\n"
+        << extra_conf;
     }
     const auto log = (dir_.path() / "mosquitto.log").string();
     pid_ = ::fork();
