@@ -471,9 +471,13 @@ Config merge(Config c, const CliOptions& cli) {
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
   if (c.mqtt.client_id.empty()) c.mqtt.client_id = "canopen-gateway-" + c.gateway_id;
   if (cli.http) split_host_port(*cli.http, c.http.address, c.http.port);
+  const char* systemd_state = std::getenv("STATE_DIRECTORY");  // StateDirectory= (may list several, ':')
+  if (c.state_dir.empty() && systemd_state != nullptr && *systemd_state != '\0') {
+    const std::string dirs = systemd_state;
+    c.state_dir = dirs.substr(0, dirs.find(':'));
+  }
   if (c.state_dir.empty()) {
-    // A service runs as root (or with StateDirectory=); a user's run keeps
-    // its state in the user's home.
+    // A service runs as root; a user's run keeps its state in the user's home.
     const char* home = std::getenv("HOME");
     c.state_dir = (::geteuid() == 0 || home == nullptr)
                       ? std::string("/var/lib/canopen-gateway")

@@ -318,5 +318,20 @@ TEST(Config, ExampleFileInDeployIsValid) {
   EXPECT_FALSE(c.networks.empty());
 }
 
+// Under systemd's StateDirectory= the queue goes where systemd says.
+TEST(Config, StateDirectoryFromSystemd) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  ::setenv("STATE_DIRECTORY", "/var/lib/canopen-gateway-x:/var/lib/other", 1);
+  const Config c = merge(Config{}, cli);
+  ::unsetenv("STATE_DIRECTORY");
+  EXPECT_EQ(c.state_dir, "/var/lib/canopen-gateway-x");
+  EXPECT_EQ(c.mqtt.queue_dir, "/var/lib/canopen-gateway-x/mqtt-queue");
+  Config explicit_dir = parse_config("gateway: {state-dir: /srv/gw}\n", "gw.yaml");
+  ::setenv("STATE_DIRECTORY", "/var/lib/canopen-gateway-x", 1);
+  EXPECT_EQ(merge(explicit_dir, cli).state_dir, "/srv/gw");  // the file wins
+  ::unsetenv("STATE_DIRECTORY");
+}
+
 }  // namespace
 }  // namespace gateway
