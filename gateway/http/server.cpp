@@ -433,7 +433,11 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
       if (load_static_file(cfg.static_dir, segments, cfg.max_static_file_bytes, r.body, r.content_type) ==
           StaticResult::Ok) {
         r.headers.emplace_back("Cache-Control", "no-cache");
-        r.headers.emplace_back("X-Content-Type-Options", "nosniff");
+        // The dashboard loads only its own files and talks only to this
+        // server (REST and the WebSocket); no inline script.
+        r.headers.emplace_back("Content-Security-Policy",
+                               "default-src 'self'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+                               "connect-src 'self'; frame-ancestors 'none'; base-uri 'none'; form-action 'self'");
         send(std::move(r));
       } else {
         send(Response::problem(404, "no such file: " + req->path));
@@ -533,6 +537,14 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     res.result(static_cast<unsigned>(r.status));
     res.set(bhttp::field::server, "canopen-gateway");
     if (!r.body.empty() || r.status >= 200) res.set(bhttp::field::content_type, r.content_type);
+    // Defaults a route may override: API answers are live data (never
+    // cached by a proxy or browser), nothing is sniffed, framed or told
+    // where it came from; over TLS browsers keep to HTTPS.
+    res.set(bhttp::field::cache_control, "no-store");
+    res.set("X-Content-Type-Options", "nosniff");
+    res.set("X-Frame-Options", "DENY");
+    res.set("Referrer-Policy", "no-referrer");
+    if (tls_) res.set("Strict-Transport-Security", "max-age=31536000");
     for (auto& [k, v] : r.headers) res.set(k, v);
     res.keep_alive(keep_alive_ && !impl_->stopped);
     res.body() = std::move(r.body);

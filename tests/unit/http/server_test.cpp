@@ -3,6 +3,7 @@
 // own io_context and a deadline on every operation, so nothing can hang.
 #include "http_server.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <openssl/evp.h>
 #include <openssl/pem.h>
@@ -307,6 +308,11 @@ TEST(HttpServer, RoutesWithPathParamsAndQuery) {
   EXPECT_EQ(boost::json::serialize(v.at("query")), R"([["type","u16"],["x","a b!"],["flag",""]])");
   EXPECT_EQ(v.at("accept"), "application/json");
   EXPECT_EQ(v.at("peer_local"), true);
+  // API answers are live data: never cached, never sniffed; no HSTS on plain HTTP.
+  EXPECT_EQ(res[bhttp::field::cache_control], "no-store");
+  EXPECT_EQ(res["X-Content-Type-Options"], "nosniff");
+  EXPECT_EQ(res["Referrer-Policy"], "no-referrer");
+  EXPECT_EQ(res.count("Strict-Transport-Security"), 0u);
 
   res = c.request(bhttp::verb::put, "/api/v1/networks/2/nodes/%31%30/sdo/0x6040/0", R"({"value":6})",
                   {{"Content-Type", "application/json"}});
@@ -540,6 +546,10 @@ TEST_F(StaticFiles, ServesDashboardWithContentTypesAndRefusesTraversal) {
   EXPECT_EQ(res.result_int(), 200u);
   EXPECT_EQ(res[bhttp::field::content_type], "text/html; charset=utf-8");
   EXPECT_EQ(res.body(), "<!doctype html><title>gw</title>");
+  // The dashboard may load only its own files and talk only to this server.
+  EXPECT_THAT(std::string(res["Content-Security-Policy"]), ::testing::HasSubstr("default-src 'self'"));
+  EXPECT_THAT(std::string(res["Content-Security-Policy"]), ::testing::HasSubstr("frame-ancestors 'none'"));
+  EXPECT_EQ(res["X-Frame-Options"], "DENY");
   res = c.get("/static/app.js");
   EXPECT_EQ(res.result_int(), 200u);
   EXPECT_EQ(res[bhttp::field::content_type], "text/javascript; charset=utf-8");
@@ -795,6 +805,7 @@ TEST_F(Tls, HttpsAndWssWorkAndPlainHttpIsRefused) {
       ASSERT_FALSE(d.run([&](auto h) { bhttp::async_read(s, buf, res, h); }, cancel));
       EXPECT_EQ(res.result_int(), 200u);
       EXPECT_EQ(parse_json(res.body()).at("path"), "/api/v1/gateway");
+      EXPECT_EQ(res["Strict-Transport-Security"], "max-age=31536000");  // browsers stay on HTTPS
     }
   }
   {
