@@ -12,12 +12,19 @@ PACKAGES=(
   libpaho-mqtt-dev libpaho-mqttpp-dev
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
-  libyaml-cpp-dev libssl-dev
+  libyaml-cpp-dev libssl-dev openssl
   # broker and CAN tools for tests and the demo
   mosquitto mosquitto-clients can-utils iproute2 python3 python3-can python3-paho-mqtt
   # SocketCAN without host kernel support: user-mode Linux ships vcan & co.
   user-mode-linux kmod
+  # dashboard browser test (tests/browser): Debian's headless Chromium, driven by playwright-core from npm
+  chromium chromium-driver
 )
+# Node.js and npm only where there are none: a machine with another Node.js
+# build (NodeSource's nodejs bundles npm) must not get Debian's npm, which
+# conflicts with it. playwright-core needs Node.js 20 or newer.
+command -v node >/dev/null 2>&1 || PACKAGES+=(nodejs)
+command -v npm >/dev/null 2>&1 || PACKAGES+=(npm)
 
 missing=()
 for p in "${PACKAGES[@]}"; do
@@ -26,16 +33,27 @@ for p in "${PACKAGES[@]}"; do
   fi
 done
 
-if [ ${#missing[@]} -eq 0 ]; then
-  echo "install-deps: all ${#PACKAGES[@]} packages present"
-  exit 0
-fi
-
 SUDO=""
 if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-echo "install-deps: installing ${missing[*]}"
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -q
-$SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
-# The mosquitto package starts a system broker on :1883; tests run their own
-# brokers on private ports, so the system one is left as the admin set it.
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#PACKAGES[@]} packages present"
+else
+  echo "install-deps: installing ${missing[*]}"
+  export DEBIAN_FRONTEND=noninteractive
+  $SUDO apt-get update -q
+  $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"
+  # The mosquitto package starts a system broker on :1883; tests run their own
+  # brokers on private ports, so the system one is left as the admin set it.
+fi
+
+# The browser test's npm packages, exactly as locked (playwright-core only; it
+# drives /usr/bin/chromium and never downloads a browser). Skipped when
+# node_modules was installed from the current lock, so repeated runs stay offline.
+browser_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/tests/browser"
+if [ -f "$browser_dir/package-lock.json" ]; then
+  installed="$browser_dir/node_modules/.package-lock.json"
+  if [ ! -f "$installed" ] || [ "$browser_dir/package-lock.json" -nt "$installed" ]; then
+    echo "install-deps: npm ci in tests/browser"
+    (cd "$browser_dir" && PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --no-audit --no-fund)
+  fi
+fi

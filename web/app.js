@@ -1,0 +1,941 @@
+// Dashboard of canopen-gateway: plain ES module, no build step.
+// Data: REST under /api/v1 for snapshots and commands, the WebSocket
+// /api/v1/events for everything live (see ../shared/api-contract.md).
+// The DOM is built with textContent only: names and descriptions come from
+// EDS files and devices and must never be interpreted as HTML.
+
+const TOKEN_KEY = 'canopen-gateway.token';
+const CHART_WINDOW_S = 60;      // seconds of history shown in the small charts
+const HISTORY_MAX = 1200;       // samples kept per value (bounds memory at high PDO rates)
+const RENDER_INTERVAL_MS = 250; // live values and charts are redrawn at most 4x per second
+const EMCY_MAX = 200;
+
+// ---------------------------------------------------------------- state
+
+const state = {
+  token: readToken(),
+  net: 1,
+  networks: [],
+  gateway: null,
+  gatewayLoadedAt: 0,
+  nodes: new Map(),       // node-ID -> summary (+ hbAt: client time of the last heartbeat)
+  values: new Map(),      // node-ID -> Map("index:sub" -> latest mapped value)
+  history: new Map(),     // "node/index:sub" -> {t: [], v: []}
+  emcy: [],               // newest first
+  selected: null,
+  od: new Map(),          // node-ID -> OD response (cached: the EDS does not change at run time)
+  ws: null,
+  wsOpen: false,
+  wsRetry: 0,
+  authBlocked: false,     // a 401 happened: wait for a token instead of retrying
+  dirty: { nodes: false, values: false, emcy: false, valueLayout: false },
+};
+
+function readToken() {
+  try { return localStorage.getItem(TOKEN_KEY) || ''; } catch { return ''; }
+}
+function writeToken(t) {
+  try {
+    if (t) localStorage.setItem(TOKEN_KEY, t); else localStorage.removeItem(TOKEN_KEY);
+  } catch { /* storage disabled: the token then lives for this page only */ }
+}
+
+// ---------------------------------------------------------------- helpers
+
+const $ = (sel, root = document) => root.querySelector(sel);
+
+function el(tag, attrs = {}, ...children) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (v === undefined || v === null || v === false) continue;
+    if (k === 'class') e.className = v;
+    else if (k === 'text') e.textContent = v;
+    else if (k.startsWith('data-') || k === 'title' || k === 'type' || k === 'role' || k.startsWith('aria-') ||
+             k === 'colspan' || k === 'placeholder' || k === 'name' || k === 'value' || k === 'spellcheck' ||
+             k === 'tabindex')
+      e.setAttribute(k, v === true ? '' : String(v));
+    else e[k] = v;
+  }
+  for (const c of children) if (c !== null && c !== undefined) e.append(c);
+  return e;
+}
+
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+const hex = (n, digits) => Number(n).toString(16).toUpperCase().padStart(digits, '0');
+const keyOf = (index, sub) => `${hex(index, 4)}:${sub}`;
+
+function fmtAge(ms) {
+  if (ms === null || ms === undefined || !Number.isFinite(ms)) return '–';
+  if (ms < 10_000) return `${(ms / 1000).toFixed(1)} s`;
+  if (ms < 120_000) return `${Math.round(ms / 1000)} s`;
+  if (ms < 7_200_000) return `${Math.round(ms / 60_000)} min`;
+  return `${Math.round(ms / 3_600_000)} h`;
+}
+
+function fmtDuration(s) {
+  const d = Math.floor(s / 86400), h = Math.floor(s / 3600) % 24, m = Math.floor(s / 60) % 60;
+  if (d) return `${d}d ${h}h`;
+  if (h) return `${h}h ${m}m`;
+  return `${m}m ${Math.floor(s % 60)}s`;
+}
+
+function fmtTime(ts) {
+  const d = new Date(ts);
+  if (Number.isNaN(d.getTime())) return String(ts ?? '');
+  return d.toLocaleTimeString(undefined, { hour12: false }) + '.' + String(d.getMilliseconds()).padStart(3, '0');
+}
+
+const INT_TYPES = new Set(['i8', 'i16', 'i24', 'i32', 'i40', 'i48', 'i56', 'i64',
+                           'u8', 'u16', 'u24', 'u32', 'u40', 'u48', 'u56', 'u64']);
+const INT_BITS = (t) => Number(t.slice(1));
+
+// Value as shown: unsigned integers also in hex, because CANopen people read
+// status words, codes and identities in hex.
+function fmtValue(value, type) {
+  if (value === null || value === undefined) return '–';
+  if (typeof value === 'boolean') return value ? 'true' : 'false';
+  if (type && type[0] === 'u' && INT_TYPES.has(type)) {
+    try {
+      const big = BigInt(value);
+      return `${big} (0x${big.toString(16).toUpperCase().padStart(Math.ceil(INT_BITS(type) / 4), '0')})`;
+    } catch { return String(value); }
+  }
+  if (typeof value === 'number' && !Number.isInteger(value)) return String(Number(value.toPrecision(7)));
+  return String(value);
+}
+
+const fmtNum = (n) => (Number.isInteger(n) ? String(n) : String(Number(n.toPrecision(4))));
+
+// A chartable number, or null (strings such as vs/os/d are not charted).
+function numeric(value, type) {
+  if (typeof value === 'number') return Number.isFinite(value) ? value : null;
+  if (typeof value === 'boolean') return value ? 1 : 0;
+  if (typeof value === 'string' && type && INT_TYPES.has(type)) {
+    const n = Number(value);
+    return Number.isFinite(n) ? n : null;
+  }
+  return null;
+}
+
+// Text typed by the user -> JSON value of the contract for `type`.
+function parseInput(text, type) {
+  const s = text.trim();
+  if (type === 'vs' || type === 'us') return text;
+  if (type === 'os' || type === 'd') {
+    const h = s.replace(/^0x/i, '').replace(/\s+/g, '');
+    if (!/^([0-9a-fA-F]{2})*$/.test(h)) throw new Error('expected hex bytes, e.g. 0a1b2c');
+    return h.toLowerCase();
+  }
+  if (type === 'b') {
+    if (/^(1|true|on)$/i.test(s)) return true;
+    if (/^(0|false|off)$/i.test(s)) return false;
+    throw new Error('expected true or false');
+  }
+  if (type && INT_TYPES.has(type)) {
+    if (!/^-?(0x[0-9a-f]+|\d+)$/i.test(s)) throw new Error('expected an integer (decimal or 0x hex)');
+    const neg = s.startsWith('-');
+    const big = neg ? -BigInt(s.slice(1)) : BigInt(s);
+    // Wider than 53 bits goes as a decimal string, as the contract says.
+    return big >= BigInt(Number.MIN_SAFE_INTEGER) && big <= BigInt(Number.MAX_SAFE_INTEGER) ? Number(big) : big.toString();
+  }
+  if (type === 'r32' || type === 'r64') {
+    if (/^(nan|inf|-inf)$/i.test(s)) return s.toLowerCase();
+    const n = Number(s);
+    if (s === '' || !Number.isFinite(n)) throw new Error('expected a number');
+    return n;
+  }
+  // Time types and anything unknown go as typed; the gateway validates.
+  return /^-?\d+(\.\d+)?$/.test(s) ? Number(s) : s;
+}
+
+// ---------------------------------------------------------------- REST
+
+class ApiError extends Error {
+  constructor(status, detail, abortCode) {
+    super(detail);
+    this.status = status;
+    this.detail = detail;
+    this.abortCode = abortCode;
+  }
+}
+
+async function api(method, path, body, retried = false) {
+  const headers = { Accept: 'application/json' };
+  if (state.token) headers.Authorization = `Bearer ${state.token}`;
+  if (body !== undefined) headers['Content-Type'] = 'application/json';
+  let res;
+  try {
+    res = await fetch(`/api/v1${path}`, {
+      method, headers, cache: 'no-store', body: body === undefined ? undefined : JSON.stringify(body),
+    });
+  } catch (e) {
+    throw new ApiError(0, `gateway unreachable (${e.message})`);
+  }
+  const text = await res.text();
+  let data = null;
+  if (text) { try { data = JSON.parse(text); } catch { data = null; } }
+  // The gateway rate-limits per client; a read can simply wait its turn once.
+  if (res.status === 429 && method === 'GET' && !retried) {
+    await sleep(1000 * Math.min(5, Number(res.headers.get('Retry-After')) || 1));
+    return api(method, path, body, true);
+  }
+  if (!res.ok) {
+    const detail = (data && (data.detail || data.title)) || res.statusText || `HTTP ${res.status}`;
+    if (res.status === 401) needToken(detail);
+    throw new ApiError(res.status, detail, data && data.abortCode);
+  }
+  return data;
+}
+
+// One readable line per failure; problem+json's detail is the substance.
+function describeError(err) {
+  if (!(err instanceof ApiError)) return String(err && err.message || err);
+  switch (err.status) {
+    case 0: return err.detail;
+    case 401: return `Token required or invalid: ${err.detail}`;
+    case 403: return `Not permitted for this token's role: ${err.detail}`;
+    case 422: return `SDO abort${err.abortCode ? ' ' + err.abortCode : ''}: ${err.detail}`;
+    case 429: return `Gateway busy, try again: ${err.detail}`;
+    case 503: return `Bus unavailable: ${err.detail}`;
+    case 504: return `No answer from the node: ${err.detail}`;
+    default: return `Error ${err.status}: ${err.detail}`;
+  }
+}
+
+// ---------------------------------------------------------------- toasts
+
+function toast(message, kind = 'info') {
+  const t = el('div', { class: 'toast', 'data-kind': kind, role: kind === 'error' ? 'alert' : 'status', text: message });
+  t.addEventListener('click', () => t.remove());
+  $('#toasts').append(t);
+  while ($('#toasts').children.length > 5) $('#toasts').firstElementChild.remove();
+  setTimeout(() => t.remove(), kind === 'error' ? 10_000 : 3_500);
+}
+
+// ---------------------------------------------------------------- token prompt
+
+function needToken(detail) {
+  state.authBlocked = true;
+  closeWs();
+  setWs('closed', 'token needed');
+  if (!state.nodes.size) {
+    $('#nodes-body').replaceChildren(el('tr', { class: 'empty' }, el('td', { colspan: 6, text: 'token required' })));
+  }
+  const msg = state.token
+    ? `The gateway refused the stored token (${detail}). Enter a valid token.`
+    : 'This gateway requires an access token. Enter it to continue.';
+  openTokenDialog(msg, true);
+}
+
+function openTokenDialog(message, isError) {
+  const box = $('#auth-prompt');
+  $('#auth-message').textContent = message;
+  $('#auth-message').classList.toggle('err', !!isError);
+  box.dataset.reason = isError ? 'required' : 'manual';
+  box.hidden = false;
+  $('#token-input').value = '';
+  $('#token-input').focus();
+}
+
+function closeTokenDialog() { $('#auth-prompt').hidden = true; }
+
+function setupToken() {
+  $('#token-button').addEventListener('click', () =>
+    openTokenDialog(state.token ? 'A token is stored in this browser. Enter another one to replace it.'
+                                : 'No token is stored. The gateway may not need one.', false));
+  $('#token-cancel').addEventListener('click', closeTokenDialog);
+  $('#token-clear').addEventListener('click', () => {
+    state.token = '';
+    writeToken('');
+    closeTokenDialog();
+    updateTokenButton();
+    restart();
+  });
+  $('#token-form').addEventListener('submit', (e) => {
+    e.preventDefault();
+    const t = $('#token-input').value.trim();
+    if (!t) { $('#auth-message').textContent = 'Enter a token.'; return; }
+    state.token = t;
+    writeToken(t);
+    closeTokenDialog();
+    updateTokenButton();
+    restart();
+  });
+  document.addEventListener('keydown', (e) => {
+    if (e.key === 'Escape' && !$('#auth-prompt').hidden) closeTokenDialog();
+  });
+  updateTokenButton();
+}
+
+function updateTokenButton() {
+  const b = $('#token-button');
+  b.textContent = state.token ? 'Token ✓' : 'Token';
+  b.dataset.hasToken = state.token ? '1' : '0';
+}
+
+// ---------------------------------------------------------------- loading
+
+async function loadGateway() {
+  const gw = await api('GET', '/gateway');
+  state.gateway = gw;
+  state.gatewayLoadedAt = performance.now();
+  state.networks = gw.networks || [];
+  if (!state.networks.some((n) => n.network === state.net) && state.networks.length) state.net = state.networks[0].network;
+  $('#gw-id').textContent = gw.gatewayId || '';
+  const sel = $('#net-select');
+  sel.replaceChildren(...state.networks.map((n) =>
+    el('option', { value: n.network, text: `${n.network}: ${n.interface}`, selected: n.network === state.net })));
+  $('#net-select-wrap').hidden = state.networks.length < 2;
+  renderMeta();
+}
+
+async function loadNetwork() {
+  const n = await api('GET', `/networks/${state.net}`);
+  setBus(n.bus || 'unknown', n.lastBusEvent);
+  const facts = [
+    `${n.simulated ? 'simulated' : n.interface}`,
+    n.bitrate ? `${n.bitrate / 1000} kbit/s` : null,
+    `gateway node ${n.nodeId}`,
+    n.sync && n.sync.producer ? `SYNC ${n.sync.periodUs / 1000} ms` : 'no SYNC',
+    n.heartbeatMs ? `heartbeat ${n.heartbeatMs} ms` : null,
+    n.counters && n.counters.events !== undefined ? `${n.counters.events} events` : null,
+  ].filter(Boolean);
+  $('#net-facts').textContent = facts.join(' · ');
+}
+
+async function loadNodes() {
+  const r = await api('GET', `/networks/${state.net}/nodes`);
+  const now = Date.now();
+  const seen = new Set();
+  for (const n of r.nodes || []) {
+    seen.add(n.node);
+    const prev = state.nodes.get(n.node);
+    state.nodes.set(n.node, {
+      ...n,
+      hbAt: n.lastHeartbeatAgeMs === null || n.lastHeartbeatAgeMs === undefined ? (prev ? prev.hbAt : null)
+                                                                               : now - n.lastHeartbeatAgeMs,
+    });
+  }
+  for (const id of [...state.nodes.keys()]) if (!seen.has(id)) state.nodes.delete(id);
+  state.dirty.nodes = true;
+  // Latest TPDO values and EMCY history of every node, so nothing starts
+  // empty; a few at a time so a large network stays under the rate limit.
+  await inBatches([...state.nodes.keys()], 4, async (id) => {
+    try {
+      const [node, emcy] = await Promise.all([
+        api('GET', `/networks/${state.net}/nodes/${id}`),
+        api('GET', `/networks/${state.net}/nodes/${id}/emcy`),
+      ]);
+      const m = valuesOf(id);
+      for (const v of node.values || []) m.set(keyOf(v.index, v.subIndex), v);
+      for (const e of emcy.emcy || []) addEmcy({ ...e, node: id }, false);
+    } catch (e) {
+      if (e.status === 401) throw e;
+    }
+  });
+  state.emcy.sort((a, b) => (b.ts - a.ts));
+  state.dirty.values = state.dirty.valueLayout = state.dirty.emcy = true;
+}
+
+async function inBatches(items, size, fn) {
+  for (let i = 0; i < items.length; i += size) await Promise.all(items.slice(i, i + size).map(fn));
+}
+
+function valuesOf(id) {
+  let m = state.values.get(id);
+  if (!m) { m = new Map(); state.values.set(id, m); }
+  return m;
+}
+
+let loading = null;
+async function loadAll() {
+  if (loading) return loading;
+  loading = (async () => {
+    try {
+      await loadGateway();
+      await Promise.all([loadNetwork(), loadNodes()]);
+      state.authBlocked = false;
+      if (state.selected === null || !state.nodes.has(state.selected)) {
+        const fromHash = Number(new URLSearchParams(location.hash.slice(1)).get('node'));
+        const first = state.nodes.has(fromHash) ? fromHash : [...state.nodes.keys()].sort((a, b) => a - b)[0];
+        if (first !== undefined) selectNode(first);
+      }
+      document.body.dataset.loaded = '1';
+      connectWs();
+    } catch (e) {
+      if (e.status !== 401) toast(describeError(e), 'error');
+      if (e.status !== 401) setTimeout(() => { if (!state.wsOpen) loadAll(); }, 3000);
+    } finally {
+      loading = null;
+    }
+  })();
+  return loading;
+}
+
+function restart() {
+  closeWs();
+  state.authBlocked = false;
+  state.nodes.clear();
+  state.values.clear();
+  state.history.clear();
+  state.emcy = [];
+  emcySeen.clear();
+  state.od.clear();
+  if (state.selected !== null) renderOd(state.selected);
+  loadAll();
+}
+
+// ---------------------------------------------------------------- WebSocket
+
+function wsUrl() {
+  const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  // Browsers cannot set headers on a WebSocket, so the token goes in the query.
+  const q = state.token ? `?access_token=${encodeURIComponent(state.token)}` : '';
+  return `${proto}//${location.host}/api/v1/events${q}`;
+}
+
+function setWs(st, text) {
+  const p = $('#ws-state');
+  p.dataset.state = st;
+  p.textContent = text;
+  document.body.dataset.ws = st;
+}
+
+function closeWs() {
+  if (state.ws) {
+    state.ws.onclose = state.ws.onmessage = state.ws.onerror = state.ws.onopen = null;
+    try { state.ws.close(); } catch { /* already closed */ }
+  }
+  state.ws = null;
+  state.wsOpen = false;
+  setWs('closed', 'offline');
+}
+
+let wsTimer = null;
+function connectWs() {
+  if (state.ws || state.authBlocked) return;
+  clearTimeout(wsTimer);
+  setWs('connecting', 'connecting…');
+  let opened = false;
+  const ws = new WebSocket(wsUrl());
+  state.ws = ws;
+  ws.onopen = () => {
+    opened = true;
+    state.wsOpen = true;
+    // Reconnected after a gap: events were missed, so take a fresh snapshot.
+    if (state.wsRetry > 0) loadNodes().then(() => loadNetwork()).catch(() => {});
+    state.wsRetry = 0;
+    ws.send('{}'); // the dashboard wants every network, node and kind
+    setWs('open', 'live');
+  };
+  ws.onmessage = (m) => {
+    if (typeof m.data !== 'string') return;
+    let msg;
+    try { msg = JSON.parse(m.data); } catch { return; }
+    if (msg.kind) onEvent(msg);
+    else if (msg.error) toast(`Event stream: ${msg.error}`, 'error');
+  };
+  ws.onclose = async () => {
+    state.ws = null;
+    state.wsOpen = false;
+    if (state.authBlocked) return;
+    setWs('closed', 'reconnecting…');
+    // A refused upgrade looks like any close to the page: ask REST why, so a
+    // missing or wrong token shows the prompt instead of endless retries.
+    if (!opened) {
+      try { await api('GET', '/gateway'); } catch (e) { if (e.status === 401) return; }
+    }
+    state.wsRetry++;
+    const delay = Math.min(10_000, 500 * 2 ** Math.min(state.wsRetry, 5));
+    wsTimer = setTimeout(connectWs, delay);
+  };
+}
+
+function onEvent(msg) {
+  const ev = msg[msg.kind];
+  if (!ev) return;
+  if (msg.kind === 'status') { renderMeta(ev); return; }
+  if (ev.network !== state.net) return;
+  switch (msg.kind) {
+    case 'tpdo': onTpdo(ev); break;
+    case 'heartbeat': touchNode(ev.node, { state: ev.state, hbAt: Date.now() }); break;
+    case 'state': touchNode(ev.node, { state: ev.state }); break;
+    case 'emcy': {
+      const n = touchNode(ev.node, {});
+      n.emcyCount = (n.emcyCount || 0) + 1;
+      addEmcy(ev, true);
+      break;
+    }
+    case 'bus': setBus(ev.state, ev); break;
+    case 'boot':
+      if (ev.step === 'failed') toast(`Node ${ev.node} boot-up failed: ${ev.error || ev.detail}`, 'error');
+      break;
+    default: break;
+  }
+}
+
+function touchNode(id, patch) {
+  let n = state.nodes.get(id);
+  if (!n) {
+    // A node heard for the first time: show it now, details on the next snapshot.
+    n = { node: id, name: '', configured: false, state: 'unknown', hbAt: null, emcyCount: 0, identity: null, eds: false };
+    state.nodes.set(id, n);
+    scheduleNodeRefresh();
+  }
+  const before = n.state;
+  Object.assign(n, patch);
+  if (patch.state && patch.state !== before) n.changedAt = Date.now();
+  state.dirty.nodes = true;
+  return n;
+}
+
+let nodeRefresh = null;
+function scheduleNodeRefresh() {
+  if (nodeRefresh) return;
+  nodeRefresh = setTimeout(() => { nodeRefresh = null; loadNodes().catch(() => {}); }, 1500);
+}
+
+function onTpdo(ev) {
+  const m = valuesOf(ev.node);
+  const t = Date.now() / 1000;
+  for (const v of ev.values || []) {
+    const key = keyOf(v.index, v.subIndex);
+    if (!m.has(key)) state.dirty.valueLayout = true;
+    m.set(key, { ...v, tpdo: ev.tpdo, timestamp: ev.timestamp });
+    const y = numeric(v.value, v.type);
+    if (y === null) continue;
+    const hk = `${ev.node}/${key}`;
+    let h = state.history.get(hk);
+    if (!h) { h = { t: [], v: [] }; state.history.set(hk, h); }
+    h.t.push(t);
+    h.v.push(y);
+    if (h.t.length > HISTORY_MAX) { h.t.splice(0, h.t.length - HISTORY_MAX); h.v.splice(0, h.v.length - HISTORY_MAX); }
+  }
+  if (ev.node === state.selected) state.dirty.values = true;
+}
+
+const emcySeen = new Set(); // "node/seq": snapshots after a reconnect repeat what the stream already gave
+
+function addEmcy(e, live) {
+  const id = `${e.node}/${e.seq}`;
+  if (emcySeen.has(id)) return;
+  emcySeen.add(id);
+  const ts = Date.parse(e.timestamp) || Date.now();
+  state.emcy.unshift({ ...e, ts, receivedAt: live ? Date.now() : 0 });
+  if (state.emcy.length > EMCY_MAX) state.emcy.length = EMCY_MAX;
+  if (emcySeen.size > 4 * EMCY_MAX) {
+    emcySeen.clear();
+    for (const x of state.emcy) emcySeen.add(`${x.node}/${x.seq}`);
+  }
+  state.dirty.emcy = true;
+}
+
+// ---------------------------------------------------------------- rendering: header
+
+function renderMeta(status) {
+  const gw = state.gateway;
+  if (!gw) return;
+  if (status && status.state === 'offline') toast('Gateway reports offline', 'error');
+  const up = gw.uptimeSeconds + (performance.now() - state.gatewayLoadedAt) / 1000;
+  $('#gw-meta').textContent = `v${gw.version} · up ${fmtDuration(up)}`;
+}
+
+const BUS_CLASS = {
+  'error-active': 'ok', 'error-warning': 'warn', 'error-passive': 'warn', 'bus-off': 'bad', down: 'bad',
+};
+function setBus(s, ev) {
+  const p = $('#bus-state');
+  p.dataset.state = s;
+  p.dataset.level = BUS_CLASS[s] || 'unknown';
+  p.textContent = `bus: ${s}`;
+  if (ev) {
+    const tec = ev.tec ?? ev.txErrorCounter, rec = ev.rec ?? ev.rxErrorCounter;
+    p.title = `CAN bus state${ev.cause ? ` (${ev.cause})` : ''}` +
+      (tec !== undefined ? ` · TEC ${tec} REC ${rec}` : '') + (ev.dropped ? ` · ${ev.dropped} frames dropped` : '');
+  }
+}
+
+// ---------------------------------------------------------------- rendering: nodes table
+
+const PROFILES = { 401: 'CiA 401 I/O', 402: 'CiA 402 drive', 404: 'CiA 404 sensor', 406: 'CiA 406 encoder' };
+
+function identityText(id) {
+  if (!id) return '';
+  const profile = id.deviceType & 0xFFFF;
+  return [PROFILES[profile] || (profile ? `profile ${profile}` : null),
+          `vendor 0x${hex(id.vendorId, 8)}`, `product 0x${hex(id.productCode, 8)}`,
+          `rev 0x${hex(id.revision, 8)}`, id.serial ? `serial ${id.serial}` : null].filter(Boolean).join(' · ');
+}
+
+function renderNodes() {
+  const body = $('#nodes-body');
+  const ids = [...state.nodes.keys()].sort((a, b) => a - b);
+  if (!ids.length) {
+    body.replaceChildren(el('tr', { class: 'empty' }, el('td', { colspan: 6, text: 'no nodes known on this network' })));
+    return;
+  }
+  const existing = [...body.querySelectorAll('tr[data-node]')].map((r) => Number(r.dataset.node));
+  if (existing.join() !== ids.join()) {
+    body.replaceChildren(...ids.map((id) => el('tr', { 'data-node': id, tabindex: 0 },
+      el('td', { class: 'num mono', 'data-field': 'id', text: id }),
+      el('td', { 'data-field': 'name' }),
+      el('td', {}, el('span', { class: 'pill state', 'data-field': 'state' })),
+      el('td', { class: 'num mono', 'data-field': 'hb-age' }),
+      el('td', { class: 'num mono', 'data-field': 'emcy' }),
+      el('td', { class: 'col-ident small muted', 'data-field': 'identity' }))));
+  }
+  for (const id of ids) {
+    const n = state.nodes.get(id);
+    const row = body.querySelector(`tr[data-node="${id}"]`);
+    row.classList.toggle('selected', id === state.selected);
+    setText(row.querySelector('[data-field=name]'), n.name || (n.configured ? '' : 'not configured'));
+    const st = row.querySelector('[data-field=state]');
+    setText(st, n.state);
+    st.dataset.state = n.state;
+    setText(row.querySelector('[data-field=emcy]'), n.emcyCount ?? 0);
+    row.querySelector('[data-field=emcy]').classList.toggle('has-emcy', (n.emcyCount || 0) > 0);
+    const ident = row.querySelector('[data-field=identity]');
+    setText(ident, identityText(n.identity) || '–');
+  }
+  $('#nodes').classList.toggle('no-ident', ids.every((id) => !state.nodes.get(id).identity));
+  renderAges();
+  if (state.selected !== null) renderNodeHeader();
+}
+
+function renderAges() {
+  const now = Date.now();
+  for (const row of $('#nodes-body').querySelectorAll('tr[data-node]')) {
+    const n = state.nodes.get(Number(row.dataset.node));
+    if (!n) continue;
+    const age = n.hbAt ? now - n.hbAt : null;
+    const cell = row.querySelector('[data-field=hb-age]');
+    setText(cell, fmtAge(age));
+    cell.classList.toggle('stale', age !== null && age > 5000);
+  }
+}
+
+function setText(node, text) {
+  const s = String(text);
+  if (node && node.textContent !== s) node.textContent = s;
+}
+
+// ---------------------------------------------------------------- rendering: selected node
+
+function selectNode(id) {
+  if (state.selected === id) return;
+  state.selected = id;
+  const params = new URLSearchParams(location.hash.slice(1));
+  params.set('node', id);
+  history.replaceState(null, '', `#${params}`);
+  $('#node-empty').hidden = true;
+  $('#node-detail').hidden = false;
+  $('#panel-node').dataset.node = id;
+  destroyCharts();
+  state.dirty.nodes = state.dirty.values = state.dirty.valueLayout = state.dirty.emcy = true;
+  renderOd(id);
+}
+
+function renderNodeHeader() {
+  const n = state.nodes.get(state.selected);
+  if (!n) return;
+  setText($('#node-title'), `Node ${n.node}${n.name ? ' · ' + n.name : ''}`);
+  const st = $('#node-state');
+  setText(st, n.state);
+  st.dataset.state = n.state;
+  setText($('#node-ident'), identityText(n.identity) || (n.eds ? '' : 'no EDS configured: values are shown raw'));
+}
+
+const charts = new Map(); // "index:sub" -> uPlot of the selected node
+
+function destroyCharts() {
+  for (const c of charts.values()) c.destroy();
+  charts.clear();
+}
+
+function cssVar(name) { return getComputedStyle(document.documentElement).getPropertyValue(name).trim(); }
+
+function makeChart(target, width) {
+  if (!window.uPlot) return null; // vendor script missing: values still show, just no chart
+  const stroke = cssVar('--accent') || '#2563eb';
+  return new window.uPlot({
+    width, height: 44, class: 'spark',
+    cursor: { show: false }, legend: { show: false }, select: { show: false },
+    scales: {
+      x: { time: true },
+      // 8% headroom so extremes and flat lines stay visible inside the box.
+      y: { range: (u, min, max) => { const pad = min === max ? Math.max(1, Math.abs(min) * 0.1) : (max - min) * 0.08;
+                                       return [min - pad, max + pad]; } },
+    },
+    axes: [{ show: false }, { show: false }],
+    series: [{}, { stroke, width: 1.5, fill: cssVar('--accent-fill') || 'rgba(37,99,235,.12)', points: { show: false } }],
+  }, [[], []], target);
+}
+
+function renderValues() {
+  const id = state.selected;
+  const box = $('#values');
+  if (id === null) return;
+  const m = state.values.get(id) || new Map();
+  const keys = [...m.keys()].sort();
+  if (state.dirty.valueLayout) {
+    destroyCharts();
+    if (!keys.length) {
+      box.replaceChildren(el('div', { class: 'muted', text: 'No TPDO received from this node yet (is it operational?).' }));
+    } else {
+      box.replaceChildren(...keys.map((k) => {
+        const v = m.get(k);
+        return el('div', { class: 'value-card', 'data-key': k, 'data-node': id },
+          el('div', { class: 'value-head' },
+            el('span', { class: 'value-name', title: `${v.name || k} (${v.type}, TPDO${v.tpdo})`, text: v.name || k }),
+            el('span', { class: 'value-meta mono', text: k.replace(':', 'h/'),
+                         title: `object ${k.replace(':', 'h sub ')}, type ${v.type}, TPDO${v.tpdo}` })),
+          el('div', { class: 'value-row' },
+            el('span', { class: 'value mono', 'data-field': 'value' }),
+            el('span', { class: 'value-range mono', 'data-field': 'range', title: `lowest and highest in the chart` })),
+          el('div', { class: 'chart', 'data-field': 'chart' }));
+      }));
+    }
+    state.dirty.valueLayout = false;
+  }
+  const now = Date.now() / 1000;
+  for (const card of box.querySelectorAll('.value-card')) {
+    const k = card.dataset.key;
+    const v = m.get(k);
+    if (!v) continue;
+    setText(card.querySelector('[data-field=value]'), fmtValue(v.value, v.type));
+    const h = state.history.get(`${id}/${k}`);
+    const holder = card.querySelector('[data-field=chart]');
+    if (!h || !h.t.length) continue;
+    let c = charts.get(k);
+    if (!c) {
+      c = makeChart(holder, Math.max(120, holder.clientWidth));
+      if (!c) continue;
+      charts.set(k, c);
+    }
+    // Only the visible window is handed to the chart; older samples stay for a moment in history.
+    let i = 0;
+    while (i < h.t.length && h.t[i] < now - CHART_WINDOW_S) i++;
+    if (i > 0 && i > h.t.length / 2) { h.t.splice(0, i); h.v.splice(0, i); i = 0; }
+    const xs = h.t.slice(i), ys = h.v.slice(i);
+    // Event-driven TPDOs are only sent on change: an operational node's
+    // value holds until the next one, so the line is drawn up to now.
+    if (xs.length && state.nodes.get(id)?.state === 'operational' && now > xs[xs.length - 1]) {
+      xs.push(now);
+      ys.push(ys[ys.length - 1]);
+    }
+    c.setData([xs, ys], true);
+    let lo = Infinity, hi = -Infinity;
+    for (const y of ys) { if (y < lo) lo = y; if (y > hi) hi = y; }
+    setText(card.querySelector('[data-field=range]'), lo === hi ? '' : `${fmtNum(lo)} … ${fmtNum(hi)}`);
+    // The window grows to CHART_WINDOW_S from the first sample, so a fresh
+    // chart is filled rather than a sliver at the right edge.
+    c.setScale('x', { min: Math.min(now - 2, Math.max(now - CHART_WINDOW_S, h.t[0])), max: now });
+  }
+}
+
+const chartResize = new ResizeObserver(() => {
+  for (const [k, c] of charts) {
+    const holder = document.querySelector(`#values .value-card[data-key="${k}"] [data-field=chart]`);
+    if (holder && holder.clientWidth && Math.abs(holder.clientWidth - c.width) > 2) c.setSize({ width: holder.clientWidth, height: 44 });
+  }
+});
+
+// ---------------------------------------------------------------- rendering: EMCY
+
+function renderEmcy() {
+  const onlyNode = $('#emcy-only-node').checked && state.selected !== null;
+  const list = onlyNode ? state.emcy.filter((e) => e.node === state.selected) : state.emcy;
+  const body = $('#emcy-body');
+  if (!list.length) {
+    body.replaceChildren(el('tr', { class: 'empty' }, el('td', { colspan: 6, text: 'no EMCY received' })));
+    return;
+  }
+  body.replaceChildren(...list.slice(0, 100).map((e) => el('tr',
+    { class: `${e.errorCode === 0 ? 'emcy-reset' : 'emcy-error'}${Date.now() - e.receivedAt < 1500 ? ' emcy-new' : ''}`,
+      'data-node': e.node, 'data-code': hex(e.errorCode, 4),
+      title: `manufacturer data ${e.manufacturerData || '–'} · seq ${e.seq}` },
+    el('td', { class: 'mono small', title: e.timestamp, text: fmtTime(e.timestamp) }),
+    el('td', { class: 'num mono', text: e.node }),
+    el('td', { class: 'mono', text: `${hex(e.errorCode, 4)}h` }),
+    el('td', { class: 'mono', title: 'error register (1001h)', text: `${hex(e.errorRegister, 2)}h` }),
+    el('td', { text: e.description || (e.errorCode === 0 ? 'error reset / no error' : '') }),
+    el('td', { class: 'col-mfr mono small muted', text: e.manufacturerData || '' }))));
+}
+
+// ---------------------------------------------------------------- object dictionary
+
+const WRITABLE = new Set(['rw', 'wo', 'rwr', 'rww']);
+const READABLE = new Set(['ro', 'rw', 'rwr', 'rww', 'const']);
+
+async function renderOd(id) {
+  const body = $('#od-body');
+  const info = $('#od-info');
+  body.replaceChildren();
+  $('#panel-od').dataset.node = id;
+  let od = state.od.get(id);
+  if (!od) {
+    info.textContent = 'loading…';
+    try {
+      od = await api('GET', `/networks/${state.net}/nodes/${id}/od`);
+      state.od.set(id, od);
+    } catch (e) {
+      if (state.selected === id) info.textContent = e.status === 404 ? describeError(e).replace(/^Error 404: /, '') : describeError(e);
+      return;
+    }
+    if (state.selected !== id) return;
+  }
+  info.textContent = `Node ${id}: ${[od.vendorName, od.productName].filter(Boolean).join(' · ')}` +
+    `${od.dcf ? ' (DCF)' : ' (EDS)'} · ${od.objects.length} objects`;
+  const rows = [];
+  for (const o of od.objects) {
+    const single = o.objectCode === 'VAR' && o.subs.length === 1 && o.subs[0].subIndex === 0;
+    if (!single) {
+      rows.push(el('tr', { class: 'od-obj', 'data-obj': o.indexHex },
+        el('td', { class: 'mono', text: `${o.indexHex}h` }),
+        el('td', { colspan: 5, text: o.name, class: 'od-obj-name' })));
+    }
+    for (const s of o.subs) rows.push(odRow(o, s, single));
+  }
+  body.replaceChildren(...rows);
+  applyOdFilter();
+}
+
+function odRow(o, s, single) {
+  const key = keyOf(o.index, s.subIndex);
+  const canWrite = WRITABLE.has(s.access);
+  const canRead = READABLE.has(s.access);
+  const range = s.low !== null || s.high !== null ? ` range ${s.low ?? '…'}..${s.high ?? '…'}` : '';
+  const title = `default ${s.default ?? '–'}${range}${s.pdoMappable ? ' · PDO-mappable' : ''}`;
+  return el('tr', {
+    class: single ? 'od-var' : 'od-sub', 'data-od': key, 'data-index': o.index, 'data-sub': s.subIndex,
+    'data-type': s.type, 'data-obj': o.indexHex,
+    'data-search': `${o.indexHex} ${o.indexHex}h 0x${o.indexHex} ${o.name} ${s.name}`.toLowerCase(),
+  },
+  el('td', { class: 'mono', text: single ? `${o.indexHex}h` : `  sub ${s.subIndex}` }),
+  el('td', { title, text: single ? o.name : s.name }),
+  el('td', { class: 'col-type mono small', text: s.type }),
+  el('td', { class: 'col-acc mono small', text: s.access }),
+  el('td', {}, el('div', { class: 'od-value' },
+    el('span', { class: 'mono', 'data-field': 'value' }),
+    canWrite ? el('input', { class: 'od-input mono', 'data-field': 'input', 'aria-label': `new value for ${key}`,
+                             placeholder: s.default !== null && s.default !== undefined ? String(s.default) : s.type,
+                             spellcheck: 'false' }) : null)),
+  el('td', { class: 'od-actions' },
+    canRead ? el('button', { type: 'button', class: 'btn btn-small', 'data-action': 'read', text: 'Read' }) : null,
+    canWrite ? el('button', { type: 'button', class: 'btn btn-small', 'data-action': 'write', text: 'Write' }) : null));
+}
+
+function applyOdFilter() {
+  const q = $('#od-filter').value.trim().toLowerCase().replace(/^0x/, '').replace(/h$/, '');
+  const objMatch = new Set();
+  for (const r of $('#od-body').querySelectorAll('tr[data-od]')) {
+    const hit = !q || r.dataset.search.includes(q);
+    r.hidden = !hit;
+    if (hit) objMatch.add(r.dataset.obj);
+  }
+  for (const r of $('#od-body').querySelectorAll('tr.od-obj')) r.hidden = !objMatch.has(r.dataset.obj);
+}
+
+async function sdoAction(row, action) {
+  const id = state.selected;
+  const index = Number(row.dataset.index);
+  const sub = Number(row.dataset.sub);
+  const type = row.dataset.type;
+  const out = row.querySelector('[data-field=value]');
+  const path = `/networks/${state.net}/nodes/${id}/sdo/${hex(index, 4)}/${sub}`;
+  row.dataset.status = 'busy';
+  out.classList.remove('err');
+  try {
+    if (action === 'read') {
+      const r = await api('GET', path);
+      out.textContent = fmtValue(r.value, r.type);
+      out.title = `raw ${r.raw || '–'} (${r.type})`;
+    } else {
+      const input = row.querySelector('[data-field=input]');
+      let value;
+      try { value = parseInput(input.value, type); } catch (e) { throw new Error(`${hex(index, 4)}h/${sub}: ${e.message}`); }
+      await api('PUT', path, { value });
+      out.textContent = fmtValue(value, type);
+      out.title = 'written';
+      toast(`Node ${id} ${hex(index, 4)}h sub ${sub} written`, 'ok');
+    }
+    row.dataset.status = 'ok';
+  } catch (e) {
+    row.dataset.status = 'error';
+    out.textContent = describeError(e);
+    out.classList.add('err');
+    if (e.status === 403) toast(describeError(e), 'error');
+  }
+}
+
+// ---------------------------------------------------------------- NMT
+
+const NMT_TEXT = { start: 'Start', stop: 'Stop', preop: 'Pre-operational', 'reset-node': 'Reset node', 'reset-comm': 'Reset communication' };
+
+async function nmt(node, command) {
+  const who = node === 0 ? 'all nodes' : `node ${node}`;
+  if (command.startsWith('reset') && !window.confirm(`${NMT_TEXT[command]} on ${who}?`)) return;
+  try {
+    await api('POST', `/networks/${state.net}/nodes/${node}/nmt`, { command });
+    toast(`NMT ${NMT_TEXT[command]} sent to ${who}`, 'ok');
+  } catch (e) {
+    toast(describeError(e), 'error');
+  }
+}
+
+// ---------------------------------------------------------------- wiring
+
+function setupEvents() {
+  $('#nodes-body').addEventListener('click', (e) => {
+    const row = e.target.closest('tr[data-node]');
+    if (row) selectNode(Number(row.dataset.node));
+  });
+  $('#nodes-body').addEventListener('keydown', (e) => {
+    const row = e.target.closest('tr[data-node]');
+    if (row && (e.key === 'Enter' || e.key === ' ')) { e.preventDefault(); selectNode(Number(row.dataset.node)); }
+  });
+  $('#panel-node').addEventListener('click', (e) => {
+    const b = e.target.closest('button[data-nmt]');
+    if (b && state.selected !== null) nmt(state.selected, b.dataset.nmt);
+  });
+  $('#nmt-all').addEventListener('click', (e) => {
+    const b = e.target.closest('button[data-nmt-all]');
+    if (b) nmt(0, b.dataset.nmtAll);
+  });
+  $('#od-body').addEventListener('click', (e) => {
+    const b = e.target.closest('button[data-action]');
+    if (b) sdoAction(b.closest('tr'), b.dataset.action);
+  });
+  $('#od-body').addEventListener('keydown', (e) => {
+    if (e.key === 'Enter' && e.target.matches('input[data-field=input]')) sdoAction(e.target.closest('tr'), 'write');
+  });
+  let t = null;
+  $('#od-filter').addEventListener('input', () => { clearTimeout(t); t = setTimeout(applyOdFilter, 120); });
+  $('#emcy-only-node').addEventListener('change', () => { state.dirty.emcy = true; });
+  $('#net-select').addEventListener('change', (e) => {
+    state.net = Number(e.target.value);
+    state.selected = null;
+    restart();
+  });
+  chartResize.observe($('#values'));
+}
+
+function tick() {
+  if (state.dirty.nodes) { state.dirty.nodes = false; renderNodes(); }
+  if (state.dirty.values || state.dirty.valueLayout) { state.dirty.values = false; renderValues(); }
+  if (state.dirty.emcy) { state.dirty.emcy = false; renderEmcy(); }
+}
+
+function start() {
+  setupToken();
+  setupEvents();
+  setInterval(tick, RENDER_INTERVAL_MS);
+  setInterval(() => { renderAges(); renderMeta(); }, 500);
+  // Counters and bus facts are cheap to poll; everything else arrives live.
+  setInterval(() => { if (state.wsOpen) loadNetwork().catch(() => {}); }, 10_000);
+  // The charts scroll even when a node goes quiet, so silence is visible.
+  setInterval(() => { if (state.selected !== null) state.dirty.values = true; }, 1000);
+  loadAll();
+}
+
+start();
