@@ -87,7 +87,11 @@ void StateCache::apply(std::uint32_t network, const canopen::Event& ev) {
           ++net.sync_count;
           net.last_sync_counter = body.counter;
         } else if constexpr (std::is_same_v<T, canopen::BootConfigEvent>) {
-          node_ref(net, body.node).boot = body;
+          auto& n = node_ref(net, body.node);
+          n.boot = body;
+          if (body.identity)
+            n.identity = Identity{body.identity->device_type, body.identity->vendor_id, body.identity->product_code,
+                                  body.identity->revision, body.identity->serial};
         } else if constexpr (std::is_same_v<T, canopen::can::BusEvent>) {
           net.bus = body.state;
           net.last_bus_event = body;

@@ -99,12 +99,23 @@ struct TimeEvent {
 };
 
 // Boot-up configuration of a node (in the spirit of CiA 302), one event per step.
+// 1000h and 1018h sub 1-4 as read from a device (sub 2-4 are optional in
+// CiA 301 7.5.2.26; 0 when the device does not have them).
+struct DeviceIdentity {
+  std::uint32_t device_type = 0;
+  std::uint32_t vendor_id = 0;
+  std::uint32_t product_code = 0;
+  std::uint32_t revision = 0;
+  std::uint32_t serial = 0;
+};
+
 struct BootConfigEvent {
   enum class Step : std::uint8_t { Identify, CheckIdentity, Configure, Start, Done, Failed };
   std::uint8_t node = 0;
   Step step = Step::Identify;
   std::error_code error;  // SDO abort or timeout when the step failed
   std::string detail;
+  std::optional<DeviceIdentity> identity;  // CheckIdentity: what the device answered
 };
 
 using EventBody = std::variant<NodeStateEvent, HeartbeatEvent, EmcyEvent, PdoEvent, SyncEvent, TimeEvent,

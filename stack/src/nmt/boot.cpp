@@ -319,7 +319,17 @@ bool BootConfigurator::check_identity(std::uint8_t node) {
     }
   }
   const std::uint64_t gen = st.run->generation;
-  emit(node, BootConfigEvent::Step::CheckIdentity, summary);
+  auto value = [&](std::uint16_t index, std::uint8_t sub) {
+    const auto it = read.find(key(index, sub));
+    return it == read.end() ? 0U : it->second;
+  };
+  DeviceIdentity id;
+  id.device_type = value(0x1000, 0);
+  id.vendor_id = value(0x1018, 1);
+  id.product_code = value(0x1018, 2);
+  id.revision = value(0x1018, 3);
+  id.serial = value(0x1018, 4);
+  emit(node, BootConfigEvent::Step::CheckIdentity, summary, id);
   const auto it = nodes_.find(node);
   return it != nodes_.end() && it->second.run && it->second.run->generation == gen;
 }
@@ -348,11 +358,13 @@ void BootConfigurator::fail(std::uint8_t node, std::error_code ec, std::string d
   if (on_event_) on_event_(e);
 }
 
-void BootConfigurator::emit(std::uint8_t node, BootConfigEvent::Step s, std::string detail) {
+void BootConfigurator::emit(std::uint8_t node, BootConfigEvent::Step s, std::string detail,
+                            std::optional<DeviceIdentity> identity) {
   BootConfigEvent e;
   e.node = node;
   e.step = s;
   e.detail = std::move(detail);
+  e.identity = identity;
   if (on_event_) on_event_(e);
 }
 

@@ -162,6 +162,15 @@ TEST(BootConfigurator, BootUp_IdentityMatches_DcfWritten_NodeStartedAndHeartbeat
   EXPECT_EQ(n.steps(), (std::vector<Step>{Step::Identify, Step::CheckIdentity, Step::Configure, Step::Start,
                                           Step::Done}));
   EXPECT_FALSE(n.boot->busy(kNode));
+  // The identity the device answered travels with the CheckIdentity step
+  // (the gateway shows it per node).
+  const auto& checked = n.events.at(1).event;
+  ASSERT_TRUE(checked.identity);
+  EXPECT_EQ(checked.identity->device_type, device_u(n, 0x1000, 0));
+  EXPECT_EQ(checked.identity->vendor_id, device_u(n, 0x1018, 1));
+  EXPECT_EQ(checked.identity->product_code, device_u(n, 0x1018, 2));
+  EXPECT_EQ(checked.identity->revision, device_u(n, 0x1018, 3));
+  EXPECT_FALSE(n.events.at(0).event.identity);
   n.expect_device_configured();
   // The DCF's differences from the EDS: TPDO2 remapped, event timers, heartbeat.
   EXPECT_EQ(device_u(n, 0x1A01, 0), 2U);

@@ -157,7 +157,8 @@ class BootConfigurator {
   bool check_identity(std::uint8_t node);
   void finish(std::uint8_t node);
   void fail(std::uint8_t node, std::error_code ec, std::string detail);
-  void emit(std::uint8_t node, BootConfigEvent::Step s, std::string detail = {});
+  void emit(std::uint8_t node, BootConfigEvent::Step s, std::string detail = {},
+            std::optional<DeviceIdentity> identity = std::nullopt);
   void stop(std::uint8_t node, TimePoint now);
 
   sdo::SdoClient& client_;
