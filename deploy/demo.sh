@@ -29,7 +29,9 @@ fi
 cat <<TXT
 
   canopen-gateway demo: simulated network 1 with nodes 5 (drive), 10 and 11 (I/O).
-  Dashboard (when built):  http://127.0.0.1:8080/
+  Dashboard:               http://127.0.0.1:8080/
+  REST (SDO read):         curl http://127.0.0.1:8080/api/v1/networks/1/nodes/5/sdo/1018/1
+  API description:         http://127.0.0.1:8080/api/v1/openapi.json
   Live MQTT events:        mosquitto_sub -h 127.0.0.1 -v -t 'canopen/#'
   WebSocket events:        ws://127.0.0.1:8080/api/v1/events
   SDO read over MQTT:      mosquitto_pub -h 127.0.0.1 -t canopen/demo/1/5/sdo/read \\
