@@ -16,7 +16,8 @@ int parse_int(const std::string& flag, const std::string& v) {
 // MQTT topic level: no wildcards, no '/', printable.
 bool valid_topic_level(const std::string& s) {
   if (s.empty() || s.size() > 64) return false;
-  for (unsigned char c : s) {
+  for (char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
     if (c <= 0x20 || c == 0x7F || c == '/' || c == '+' || c == '#') return false;
   }
   return true;

@@ -18,7 +18,6 @@
 #include "config.hpp"
 #include "http_server.hpp"
 #include "log.hpp"
-#include "metrics.hpp"
 #include "rest_api.hpp"
 
 namespace {
@@ -41,59 +40,6 @@ std::filesystem::path default_web_root() {
 }
 
 void print_error(const std::string& msg) { std::fprintf(stderr, "canopen-gateway: error: %s\n", msg.c_str()); }
-
-// GET /metrics: a snapshot of the counters in Prometheus text format.
-gateway::http::Response metrics_response(const gateway::App& app, const gateway::http::HttpServer& http) {
-  namespace m = gateway::metrics;
-  m::MetricsSnapshot s;
-  s.version = std::string(gateway::App::version());
-  for (const auto& [number, info] : app.cache().networks()) {
-    m::NetworkMetrics n;
-    n.network = number;
-    n.interface = info.simulated ? std::string("demo") : info.interface;
-    if (auto st = app.bus_state(number)) n.bus_state = std::string(canopen::can::to_string(*st));
-    if (auto c = app.channel_stats(number)) {
-      n.rx_frames = c->rx_frames;
-      n.tx_frames = c->tx_frames;
-      n.rx_dropped = c->rx_dropped;
-      n.tx_dropped = c->tx_dropped;
-      n.error_frames = c->error_frames;
-      n.reopens = c->reopens;
-    }
-    n.events = info.events;
-    s.networks.push_back(std::move(n));
-  }
-  const auto& counters = app.counters();
-  s.sdo_requests = counters.sdo_requests;
-  s.sdo_aborts = counters.sdo_aborts;
-  s.sdo_timeouts = counters.sdo_timeouts;
-  s.nmt_commands = counters.nmt_commands;
-  for (int k = 0; k <= static_cast<int>(gateway::EventKind::BootConfig); ++k) {
-    const auto kind = static_cast<gateway::EventKind>(k);
-    s.events_by_kind[std::string(gateway::to_string(kind))] = app.pipeline().published(kind);
-  }
-  if (auto mq = app.mqtt_counters()) {
-    s.mqtt_enabled = true;
-    s.mqtt_connected = mq->connected;
-    s.mqtt_published = mq->published;
-    s.mqtt_acked = mq->acked;
-    s.mqtt_dropped = mq->dropped;
-    s.mqtt_queue_depth = mq->queue_depth;
-    s.mqtt_queue_bytes = mq->queue_bytes;
-    s.mqtt_reconnects = mq->reconnects;
-  }
-  const auto hs = http.stats();
-  s.ws_clients = hs.ws_clients;
-  s.ws_messages_sent = hs.ws_messages_sent;
-  s.ws_messages_dropped = hs.ws_messages_dropped;
-  s.http_responses_by_status = hs.responses_by_status;
-  s.uptime_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - app.started_at()).count();
-  gateway::http::Response r;
-  r.status = 200;
-  r.content_type = std::string(m::kContentType);
-  r.body = m::render_metrics(s);
-  return r;
-}
 
 int run(const gateway::CliOptions& opts) {
   gateway::Config config;
@@ -137,11 +83,7 @@ int run(const gateway::CliOptions& opts) {
     if (auth.enabled && config.http.tokens.empty())
       log.warn("http: no tokens configured: every local process may use the API as admin (loopback only)");
     http->set_authorizer(gateway::auth::make_http_authorizer(auth, app->tokens(), log));
-    gateway::register_rest_routes(*http, *app);
-    http->add_route("GET", "/metrics", [&app, srv = http.get()](const gateway::http::Request&,
-                                                                 gateway::http::Responder respond) {
-      respond(metrics_response(*app, *srv));
-    });
+    gateway::register_api_routes(*http, *app);
     http->start();
   } catch (const std::exception& e) {
     print_error("http: cannot listen on " + config.http.address + ":" + std::to_string(config.http.port) + ": " +

@@ -741,6 +741,11 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
             opts, reply);
 }
 
+void App::audit(std::string_view line) {
+  log_.info("audit: " + std::string(line));
+  log_.flush();
+}
+
 void App::sdo_finished(std::chrono::steady_clock::time_point submitted_at) {
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted_at).count();
   const auto& bounds = Counters::kSdoLatencyBounds;

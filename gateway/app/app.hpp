@@ -73,6 +73,9 @@ class App {
   void add_consumer(EventPipeline::Consumer c) { pipeline_.add_consumer(std::move(c)); }
 
   const Config& config() const { return config_; }
+  // Writes one audit line ("audit: <line>", UTC time stamped, flushed at
+  // once) for a write or command that did not go through handle_request.
+  void audit(std::string_view line);
   // The bearer tokens of the config (for the HTTP authorizer too).
   const auth::TokenStore& tokens() const { return tokens_; }
   const StateCache& cache() const { return cache_; }

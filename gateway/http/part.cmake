@@ -1,15 +1,18 @@
 # HTTP/1.1 + WebSocket server (REST routes, /api/v1/events, dashboard files).
 # Beast is instantiated in server.cpp only; the rest stays light to compile.
 find_package(OpenSSL REQUIRED)
-add_library(gateway_http STATIC
+# Without Beast: request/response types, router, WebSocket filter, static
+# files (the fuzz build links only this).
+add_library(gateway_http_core STATIC
   ${CMAKE_CURRENT_LIST_DIR}/http_types.cpp
   ${CMAKE_CURRENT_LIST_DIR}/router.cpp
   ${CMAKE_CURRENT_LIST_DIR}/event_stream.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/static_files.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/server.cpp)
-target_include_directories(gateway_http PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+  ${CMAKE_CURRENT_LIST_DIR}/static_files.cpp)
+target_include_directories(gateway_http_core PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_link_libraries(gateway_http_core PUBLIC gateway_lib Boost::headers PRIVATE Boost::json canopen_options)
+add_library(gateway_http STATIC ${CMAKE_CURRENT_LIST_DIR}/server.cpp)
 target_link_libraries(gateway_http
-  PUBLIC gateway_lib Boost::headers
+  PUBLIC gateway_http_core gateway_lib Boost::headers
   PRIVATE Boost::json Boost::url OpenSSL::SSL OpenSSL::Crypto Threads::Threads canopen_options)
 # Beast at -O2 with full debug info peaks at ~3.2 GB of compiler memory and
 # ~110 s CPU for server.cpp; line tables only (-g1) cut that to ~2.1 GB and

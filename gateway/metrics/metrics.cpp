@@ -2,6 +2,7 @@
 
 #include <array>
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
 #include <system_error>
@@ -139,6 +140,29 @@ void TextWriter::single(std::string_view name, std::string_view help, MetricType
   sample(name, {}, value);
 }
 
+void TextWriter::histogram(std::string_view name, std::string_view help, const std::vector<double>& bounds,
+                           const std::vector<std::uint64_t>& counts, double sum) {
+  if (counts.size() != bounds.size() + 1)
+    throw std::invalid_argument("metrics: histogram '" + std::string(name) + "' needs one count per bound plus one");
+  family(name, help, MetricType::Histogram);
+  Family& f = find(name);
+  if (!f.lines.empty()) throw std::invalid_argument("metrics: histogram '" + f.name + "' written twice");
+  std::uint64_t cumulative = 0;
+  auto bucket = [&](const std::string& le, std::uint64_t n) {
+    f.lines.push_back(f.name + "_bucket{le=\"" + le + "\"} " + Value(n).to_string() + "\n");
+  };
+  for (std::size_t i = 0; i < bounds.size(); ++i) {
+    cumulative += counts[i];
+    char le[32];
+    std::snprintf(le, sizeof le, "%g", bounds[i]);  // "0.0005", "1", "2.5": short, as exposition usually has
+    bucket(le, cumulative);
+  }
+  cumulative += counts.back();
+  bucket("+Inf", cumulative);
+  f.lines.push_back(f.name + "_sum " + Value(sum).to_string() + "\n");
+  f.lines.push_back(f.name + "_count " + Value(cumulative).to_string() + "\n");
+}
+
 std::string TextWriter::str() const {
   std::string out;
   for (const auto& f : families_) {
@@ -148,7 +172,7 @@ std::string TextWriter::str() const {
     out += escape_help(f.help);
     out += "\n# TYPE ";
     out += f.name;
-    out += f.type == MetricType::Counter ? " counter\n" : " gauge\n";
+    out += f.type == MetricType::Counter ? " counter\n" : f.type == MetricType::Gauge ? " gauge\n" : " histogram\n";
     for (const auto& line : f.lines) out += line;
   }
   return out;
@@ -201,6 +225,13 @@ std::string render_metrics(const MetricsSnapshot& s) {
   w.single("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", C, s.sdo_aborts);
   w.single("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", C, s.sdo_timeouts);
   w.single("canopen_gateway_nmt_commands_total", "NMT commands sent.", C, s.nmt_commands);
+  if (!s.sdo_latency_bounds.empty())
+    w.histogram("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
+                s.sdo_latency_bounds, s.sdo_latency_counts, s.sdo_latency_sum);
+  if (s.request_auth_failures)
+    w.single("canopen_gateway_request_auth_failures_total",
+             "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", C,
+             *s.request_auth_failures);
 
   const std::string events = "canopen_gateway_events_published_total";
   w.family(events, "Events published to clients, by kind.", C);

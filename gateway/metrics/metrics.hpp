@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -18,7 +19,7 @@ namespace gateway::metrics {
 
 inline constexpr std::string_view kContentType = "text/plain; version=0.0.4; charset=utf-8";
 
-enum class MetricType : std::uint8_t { Counter, Gauge };
+enum class MetricType : std::uint8_t { Counter, Gauge, Histogram };
 
 // Label name/value pairs, written in the order given.
 using Labels = std::vector<std::pair<std::string, std::string>>;
@@ -58,6 +59,12 @@ class TextWriter {
   void sample(std::string_view name, const Labels& labels, Value value);
   // family() + sample() for a one-series family without labels.
   void single(std::string_view name, std::string_view help, MetricType type, Value value);
+  // A histogram family without labels: `counts` per upper bound in `bounds`
+  // (ascending), NOT cumulative, plus one last count for everything above;
+  // written as cumulative name_bucket{le=...} series, le="+Inf", name_sum and
+  // name_count. Throws std::invalid_argument when counts.size() != bounds.size() + 1.
+  void histogram(std::string_view name, std::string_view help, const std::vector<double>& bounds,
+                 const std::vector<std::uint64_t>& counts, double sum);
 
   std::string str() const;
 
@@ -100,6 +107,16 @@ struct MetricsSnapshot {
   std::vector<NetworkMetrics> networks;
   std::uint64_t sdo_requests = 0, sdo_aborts = 0, sdo_timeouts = 0;
   std::uint64_t nmt_commands = 0;
+  // SDO transfer latency (submit to result, seconds): counts per upper bound,
+  // not cumulative, the last for slower ones (TextWriter::histogram). Empty
+  // bounds = no histogram family.
+  std::vector<double> sdo_latency_bounds;
+  std::vector<std::uint64_t> sdo_latency_counts;
+  double sdo_latency_sum = 0.0;
+  // Requests refused with 401/403 by the request handler (MQTT requests,
+  // NMT resets); the HTTP authorizer's refusals are in http_responses_by_status.
+  // nullopt = no such family.
+  std::optional<std::uint64_t> request_auth_failures;
   std::map<std::string, std::uint64_t> events_by_kind;  // "tpdo" -> n
   bool mqtt_enabled = false;  // false: only canopen_gateway_mqtt_enabled 0 is written
   bool mqtt_connected = false;

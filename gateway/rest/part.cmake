@@ -1,7 +1,23 @@
 # REST API under /api/v1 (../shared/api-contract.md): routes on the
 # HttpServer that answer from the App's state cache and EDS/DCF files or
-# pass SDO/NMT requests to App::handle_request.
-add_library(gateway_rest STATIC ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp)
+# pass SDO/NMT requests to App::handle_request; /metrics; the OpenAPI
+# document (openapi.json, built into the binary).
+
+# Request decoding that needs no App (path numbers, RPDO body): its own
+# library so the fuzz build links it without the server and the App.
+add_library(gateway_rest_parse STATIC ${CMAKE_CURRENT_LIST_DIR}/rest_parse.cpp)
+target_include_directories(gateway_rest_parse PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_link_libraries(gateway_rest_parse PUBLIC canopen_pdo canopen_od gateway_messages
+                                         PRIVATE Boost::json canopen_json canopen_options)
+
+file(READ ${CMAKE_CURRENT_LIST_DIR}/openapi.json GATEWAY_OPENAPI_JSON)
+set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/openapi.json)
+configure_file(${CMAKE_CURRENT_LIST_DIR}/openapi_document.cpp.in ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp @ONLY)
+
+add_library(gateway_rest STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/api_routes.cpp
+  ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp)
 target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(gateway_rest PUBLIC gateway_app gateway_http gateway_messages
-                                   PRIVATE Boost::json canopen_json canopen_options)
+                                   PRIVATE gateway_rest_parse gateway_metrics Boost::json canopen_json canopen_options)

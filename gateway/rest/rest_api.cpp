@@ -15,6 +15,7 @@
 #include "google/protobuf/util/json_util.h"
 #include "json_text.hpp"
 #include "request_codec.hpp"
+#include "rest_parse.hpp"
 
 namespace gateway {
 
@@ -49,13 +50,7 @@ Response problem_response(int status, std::string_view detail, bool protobuf = f
 
 Response json_response(const json::value& v, int status = 200) { return Response::json(json::serialize(v), status); }
 
-std::optional<std::uint32_t> parse_decimal(std::string_view s) {
-  std::uint32_t v = 0;
-  if (s.empty() || s.size() > 9) return std::nullopt;
-  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc{} || p != s.data() + s.size()) return std::nullopt;
-  return v;
-}
+using rest::parse_decimal;
 
 std::string hex_text(std::span<const std::uint8_t> bytes) { return detail::to_hex(bytes); }
 
@@ -440,40 +435,8 @@ void nmt(App& app, const Request& req, Responder respond) {
   app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
 }
 
-std::optional<std::uint16_t> json_index(const json::value& v) {
-  if (v.is_int64() && v.as_int64() >= 0 && v.as_int64() <= 0xFFFF) return static_cast<std::uint16_t>(v.as_int64());
-  if (v.is_uint64() && v.as_uint64() <= 0xFFFF) return static_cast<std::uint16_t>(v.as_uint64());
-  if (v.is_string()) return parse_index_text(v.as_string());
-  return std::nullopt;
-}
-
-std::optional<std::uint8_t> json_sub(const json::value& v) {
-  if (v.is_int64() && v.as_int64() >= 0 && v.as_int64() <= 0xFF) return static_cast<std::uint8_t>(v.as_int64());
-  if (v.is_uint64() && v.as_uint64() <= 0xFF) return static_cast<std::uint8_t>(v.as_uint64());
-  if (v.is_string()) return parse_sub_index_text(v.as_string());
-  return std::nullopt;
-}
-
-std::optional<canopen::Bytes> parse_hex(std::string_view s) {
-  canopen::Bytes out;
-  int nibble = -1;
-  for (char c : s) {
-    int d = -1;
-    if (c >= '0' && c <= '9') d = c - '0';
-    else if (c >= 'a' && c <= 'f') d = c - 'a' + 10;
-    else if (c >= 'A' && c <= 'F') d = c - 'A' + 10;
-    else if (c == ' ') continue;
-    else return std::nullopt;
-    if (nibble < 0) {
-      nibble = d;
-    } else {
-      out.push_back(static_cast<std::uint8_t>(nibble << 4 | d));
-      nibble = -1;
-    }
-  }
-  if (nibble >= 0) return std::nullopt;
-  return out;
-}
+// Who asked, for audit lines.
+std::string who(const Request& req) { return req.who.empty() ? std::string("anonymous") : req.who; }
 
 void rpdo(App& app, const Request& req, Responder respond) {
   std::uint32_t net = 0;
@@ -491,53 +454,20 @@ void rpdo(App& app, const Request& req, Responder respond) {
   if (!cfg || !cfg->comm.cob_id.valid())
     return respond(problem_response(404, "the node's EDS/DCF has no usable " + what));
 
-  boost::system::error_code ec;
-  auto body = json::parse(req.body, ec);
-  if (ec || !body.is_object())
-    return respond(problem_response(400, "the body must be a JSON object {\"values\": [...]} or {\"raw\": \"hex\"}"));
-  const auto& o = body.as_object();
-  std::vector<canopen::MappedValue> values;
-  std::optional<canopen::Bytes> raw;
-  if (const auto* r = o.if_contains("raw")) {
-    if (!r->is_string()) return respond(problem_response(400, "\"raw\" must be a hex string"));
-    raw = parse_hex(r->as_string());
-    if (!raw) return respond(problem_response(400, "\"raw\" is not hex: '" + std::string(r->as_string()) + "'"));
-    if (raw->size() != cfg->byte_length())
-      return respond(problem_response(400, what + " carries " + std::to_string(cfg->byte_length()) + " bytes, not " +
-                                               std::to_string(raw->size())));
-  } else if (const auto* vs = o.if_contains("values"); vs != nullptr && vs->is_array() && !vs->as_array().empty()) {
-    for (const auto& item : vs->as_array()) {
-      const auto* it = item.if_object();
-      if (it == nullptr || !it->contains("index") || !it->contains("value"))
-        return respond(problem_response(400, "each of \"values\" must be {\"index\", \"subIndex\", \"value\"}"));
-      const auto index = json_index(it->at("index"));
-      const auto* sv = it->if_contains("subIndex");
-      const auto sub = sv != nullptr ? json_sub(*sv) : std::optional<std::uint8_t>{0};
-      if (!index || !sub) return respond(problem_response(400, "malformed index or subIndex in \"values\""));
-      const canopen::pdo::MappingEntry* entry = nullptr;
-      for (const auto& e : cfg->entries)
-        if (!e.dummy && e.index == *index && e.sub == *sub) entry = &e;
-      char obj[32];
-      std::snprintf(obj, sizeof obj, "%04Xh sub %u", static_cast<unsigned>(*index), static_cast<unsigned>(*sub));
-      if (entry == nullptr) return respond(problem_response(400, what + " does not map " + obj));
-      auto v = canopen::value_from_json(entry->type, it->at("value"));
-      if (!v) return respond(problem_response(400, std::string(obj) + ": " + v.error().detail));
-      if (const auto* se = desc->od.find(*index, *sub)) {
-        std::string detail;
-        if (canopen::check_limits(*v, se->low, se->high, &detail))
-          return respond(problem_response(400, "value out of range for " + std::string(obj) + ": " + detail));
-      }
-      values.push_back(canopen::MappedValue{*index, *sub, entry->name, std::move(*v)});
-    }
-  } else {
-    return respond(problem_response(400, "the body needs \"values\" (a non-empty array) or \"raw\""));
-  }
+  std::string error;
+  auto body = rest::parse_rpdo_body(req.body, *cfg, desc->od, what, error);
+  if (!body) return respond(problem_response(400, error));
+  const auto& values = body->values;
+  const auto& raw = body->raw;
   if (auto err = check_bus(app, net)) return respond(std::move(*err));
   canopen::Bytes sent;
+  const std::string audit = "RPDO write by " + who(req) + ": net " + std::to_string(net) + " " + what;
   if (auto wec = app.write_rpdo(net, node, static_cast<std::uint16_t>(*number), values, raw ? &*raw : nullptr, &sent)) {
     const int status = wec == make_error_code(canopen::SdoAbort::NoSuchObject) ? 404 : 400;
+    app.audit(audit + ": " + wec.message());
     return respond(problem_response(status, what + ": " + wec.message()));
   }
+  app.audit(audit + " = " + hex_text(sent) + ": sent");
   json::object out;
   out["network"] = net;
   out["node"] = node;
@@ -564,6 +494,8 @@ void sync(App& app, const Request& req, Responder respond) {
   }
   if (auto err = check_bus(app, net)) return respond(std::move(*err));
   app.send_sync(net, counter);
+  app.audit("SYNC by " + who(req) + ": net " + std::to_string(net) +
+            (counter ? " counter " + std::to_string(*counter) : std::string()) + ": sent");
   json::object out;
   out["network"] = net;
   out["counter"] = counter ? json::value(*counter) : json::value(nullptr);

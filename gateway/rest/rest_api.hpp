@@ -21,8 +21,13 @@
 // protobuf when the request was. The listings (gateway, network, nodes,
 // node, od, emcy), RPDO and SYNC answer JSON only.
 //
+// The same routes, /metrics and /api/v1/openapi.json are described in
+// gateway/rest/openapi.json (built into the binary, served as is).
+//
 // Thread safety: handlers run on the io_context thread of server and app.
 #pragma once
+
+#include <string_view>
 
 #include "app.hpp"
 #include "http_server.hpp"
@@ -31,5 +36,18 @@ namespace gateway {
 
 // Adds the routes above. `app` must outlive the server's use of them.
 void register_rest_routes(http::HttpServer& server, App& app);
+
+// GET /metrics: the App's and the server's counters in Prometheus text.
+void register_metrics_route(http::HttpServer& server, App& app);
+// GET /api/v1/openapi.json: openapi_document() as application/json.
+void register_openapi_route(http::HttpServer& server);
+
+// Every route of the gateway's API: the REST routes above, /metrics and
+// /api/v1/openapi.json. (/api/v1/events is the server's own WebSocket path;
+// "/" and the dashboard's files are its static directory.)
+void register_api_routes(http::HttpServer& server, App& app);
+
+// The OpenAPI 3.0 document of the API (gateway/rest/openapi.json).
+std::string_view openapi_document();
 
 }  // namespace gateway

@@ -13,15 +13,14 @@
 #include <thread>
 
 #include "auth.hpp"
-#include "rest_api.hpp"
-#include "unit/support/http_fetch.hpp"
+#include "unit/rest/rest_rig.hpp"
 
 namespace gateway {
 namespace {
 
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;
-using testing::HttpReply;
+using test::HttpReply;
 
 const std::map<Role, std::string> kTokens = {
     {Role::Viewer, "viewer-secret"}, {Role::Operator, "operator-secret"}, {Role::Admin, "admin-secret"}};
@@ -57,95 +56,75 @@ std::string concrete(std::string pattern) {
   return pattern;
 }
 
+// A FILE* whose text the test can read (the gateway's log).
+struct MemoryLog {
+  MemoryLog() : file(open_memstream(&buf, &len)) {}
+  ~MemoryLog() {
+    std::fclose(file);
+    std::free(buf);
+  }
+  MemoryLog(const MemoryLog&) = delete;
+  MemoryLog& operator=(const MemoryLog&) = delete;
+  std::string text() {
+    std::fflush(file);
+    return std::string(buf, len);
+  }
+  char* buf = nullptr;
+  std::size_t len = 0;
+  std::FILE* file;
+};
+
+// The REST rig with auth on (as outside --demo), three tokens, a dashboard
+// directory and the log captured for audit lines.
 struct SecureRig {
-  explicit SecureRig(double rate_limit = 0, double burst = 1) {
-    CliOptions cli;
-    cli.demo = true;
-    cli.gateway_id = "test";
-    Config c = merge(Config{}, cli);
-    c.http.auth = true;  // the demo turns it off; this is the production setting
-    for (const auto& [role, token] : kTokens)
-      c.http.tokens.push_back({std::string(to_string(role)), role, auth::sha256_hex(token)});
-    c.mqtt.requests_role = Role::None;
-    log_file = open_memstream(&log_buf, &log_len);
-    log = std::make_unique<Logger>(LogLevel::Info, log_file);
-    app = std::make_unique<App>(io, c, *log);
-    http::HttpConfig hc;
-    hc.address = "127.0.0.1";
-    hc.port = 0;
-    web = std::filesystem::temp_directory_path() / ("auth-web-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(web);
-    std::ofstream(web / "index.html") << "<!doctype html><title>dashboard</title>";
-    hc.static_dir = web;
-    server = std::make_unique<http::HttpServer>(io, hc);
-    auth::HttpAuthSettings s;
-    s.enabled = true;
-    s.anonymous = c.http.anonymous_role();
-    s.rate_limit = rate_limit;
-    s.rate_burst = burst;
-    server->set_authorizer(auth::make_http_authorizer(s, app->tokens(), *log));
-    register_rest_routes(*server, *app);  // TODO(lead): register_api_routes once it exists
-    app->start();
-    server->start();
-    port = server->bound_port();
-    EXPECT_TRUE(run_until([&] { return operational(5); })) << "node 5 did not start";
+  explicit SecureRig(double rate_limit = 0, double burst = 1)
+      : web(make_web()),
+        rig(
+            {},
+            [&](Config& c) {
+              c.http.auth = true;  // the demo turns it off; this is the production setting
+              for (const auto& [role, token] : kTokens)
+                c.http.tokens.push_back({std::string(to_string(role)), role, auth::sha256_hex(token)});
+              c.mqtt.requests_role = Role::None;
+              c.http.rate_limit = rate_limit;
+              c.http.rate_burst = burst;
+            },
+            log.file, web) {
+    EXPECT_TRUE(rig.run_until([&] { return rig.operational(5); })) << "node 5 did not start";
   }
   ~SecureRig() {
-    server->stop();
-    app->stop();
-    io.run_for(50ms);
-    log.reset();
-    std::fclose(log_file);
-    std::free(log_buf);
+    rig.server->stop();
     std::filesystem::remove_all(web);
   }
-
-  bool operational(std::uint8_t node) const {
-    const auto* n = app->cache().node(1, node);
-    return n != nullptr && n->state == canopen::NmtState::Operational;
+  static std::filesystem::path make_web() {
+    auto dir = std::filesystem::temp_directory_path() / ("auth-web-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    std::ofstream(dir / "index.html") << "<!doctype html><title>dashboard</title>";
+    return dir;
   }
 
-  template <typename Pred>
-  bool run_until(Pred pred, std::chrono::milliseconds limit = 10s) {
-    const auto end = std::chrono::steady_clock::now() + limit;
-    while (!pred() && std::chrono::steady_clock::now() < end) io.run_for(5ms);
-    return pred();
-  }
-
-  HttpReply request(const std::string& method, const std::string& target, const std::string& body,
-                    std::vector<std::string> headers) {
-    if (!body.empty()) headers.push_back("Content-Type: application/json");
-    auto f = std::async(std::launch::async, testing::fetch, port, method, target, body, headers);
-    auto ready = [&] { return f.wait_for(0s) == std::future_status::ready; };
-    if (!run_until(ready, 10s)) {
-      ADD_FAILURE() << method << " " << target << ": no answer";
-      server->stop();
-      run_until(ready, 5s);
-      return {};
-    }
-    return f.get();
-  }
   HttpReply as(std::optional<Role> role, const std::string& method, const std::string& target,
                const std::string& body = {}, std::vector<std::string> headers = {}) {
     if (role) headers.push_back("Authorization: Bearer " + kTokens.at(*role));
-    return request(method, target, body, std::move(headers));
+    return rig.request(method, target, body, std::move(headers));
+  }
+  HttpReply request(const std::string& method, const std::string& target, const std::string& body,
+                    std::vector<std::string> headers) {
+    return rig.request(method, target, body, std::move(headers));
+  }
+  template <typename Pred>
+  bool run_until(Pred pred) {
+    return rig.run_until(pred);
   }
 
   std::string log_text() {
-    log->flush();
-    std::fflush(log_file);
-    return std::string(log_buf, log_len);
+    rig.log->flush();
+    return log.text();
   }
 
-  boost::asio::io_context io;
-  char* log_buf = nullptr;
-  std::size_t log_len = 0;
-  std::FILE* log_file = nullptr;
-  std::unique_ptr<Logger> log;
-  std::unique_ptr<App> app;
-  std::unique_ptr<http::HttpServer> server;
+  MemoryLog log;  // outlives rig (declared before it)
   std::filesystem::path web;
-  std::uint16_t port = 0;
+  test::RestRig rig;
 };
 
 const std::vector<std::string> kUpgrade = {"Upgrade: websocket", "Connection: Upgrade",
@@ -156,7 +135,7 @@ std::string who(std::optional<Role> r) { return r ? std::string(to_string(*r)) :
 
 TEST(SecurityMatrix, EveryRouteByRole) {
   SecureRig rig;
-  auto routes = rig.server->routes();
+  auto routes = rig.rig.server->routes();
   routes.emplace_back("GET", "/api/v1/events");  // the server's own WebSocket path
   routes.emplace_back("GET", "/");               // the dashboard
   ASSERT_GE(routes.size(), 13U);
@@ -220,6 +199,8 @@ TEST(SecurityMatrix, NmtResetsNeedAdminAndEveryWriteIsAudited) {
   EXPECT_EQ(rig.as(Role::Admin, "POST", nmt, R"({"command":"reset-comm"})").status, 200);
   EXPECT_EQ(rig.as(Role::Operator, "PUT", "/api/v1/networks/1/nodes/5/sdo/1017/0", R"({"value":1000})").status, 200);
   EXPECT_EQ(rig.as(Role::Viewer, "PUT", "/api/v1/networks/1/nodes/5/sdo/1017/0", R"({"value":900})").status, 403);
+  EXPECT_EQ(rig.as(Role::Operator, "PUT", "/api/v1/networks/1/nodes/5/rpdo/1", R"({"raw":"0f00"})").status, 200);
+  EXPECT_EQ(rig.as(Role::Operator, "POST", "/api/v1/networks/1/sync", R"({"counter":3})").status, 200);
 
   const auto log = rig.log_text();
   // UTC time, who, target, result on each line.
@@ -228,6 +209,8 @@ TEST(SecurityMatrix, NmtResetsNeedAdminAndEveryWriteIsAudited) {
   EXPECT_THAT(log, HasSubstr("audit: NMT reset-comm by admin@127.0.0.1: net 1 node 5: sent"));
   EXPECT_THAT(log, HasSubstr("audit: SDO write by operator@127.0.0.1: net 1 node 5 1017h sub 0 = 1000: ok"));
   EXPECT_THAT(log, HasSubstr("audit: auth failure: viewer@127.0.0.1: PUT /api/v1/networks/1/nodes/5/sdo/1017/0: 403"));
+  EXPECT_THAT(log, HasSubstr("audit: RPDO write by operator@127.0.0.1: net 1 node 5 RPDO1 = 0f00: sent"));
+  EXPECT_THAT(log, HasSubstr("audit: SYNC by operator@127.0.0.1: net 1 counter 3: sent"));
   for (std::size_t p = log.find("audit:"); p != std::string::npos; p = log.find("audit:", p + 1)) {
     const auto line_start = log.rfind('\n', p) == std::string::npos ? 0 : log.rfind('\n', p) + 1;
     const auto line = log.substr(line_start, p - line_start);
@@ -249,7 +232,7 @@ TEST(SecurityMatrix, RequestsWithoutHttpUseTheirTokenAndTheSameRoles) {
     req.token = std::move(token);
     req.who = "mqtt";
     std::optional<ApiReply> got;
-    rig.app->handle_request(req, [&](ApiReply r) { got = std::move(r); });
+    rig.rig.app->handle_request(req, [&](ApiReply r) { got = std::move(r); });
     EXPECT_TRUE(rig.run_until([&] { return got.has_value(); }));
     return got.value_or(ApiReply{0, {}, {}});
   };

@@ -1,23 +1,11 @@
 // The REST routes against the whole gateway on the simulated demo network
 // (nodes 5: CiA 402 drive, 10 and 11: CiA 401 I/O), over real HTTP/1.1 on
-// 127.0.0.1. The client is a plain blocking socket on its own thread
-// (one request per connection, "Connection: close"); the test thread runs
-// the io_context meanwhile.
-#include "rest_api.hpp"
-
+// 127.0.0.1 (see rest_rig.hpp).
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include <boost/asio/connect.hpp>
-#include <boost/asio/ip/tcp.hpp>
-#include <boost/asio/read.hpp>
-#include <boost/asio/write.hpp>
-#include <boost/json.hpp>
-#include <cctype>
-#include <future>
-#include <thread>
-
 #include "canopen_gateway.pb.h"
+#include "rest_rig.hpp"
 
 namespace gateway {
 namespace {
@@ -25,121 +13,7 @@ namespace {
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;
 namespace json = boost::json;
-
-struct HttpReply {
-  int status = 0;
-  std::string content_type;
-  std::string body;
-  json::value parsed;  // the body as JSON; null when it is not
-  const json::value& json() const { return parsed; }
-};
-
-// One request on a fresh connection; blocking; run on a separate thread.
-HttpReply fetch(std::uint16_t port, std::string method, std::string target, std::string body,
-                std::vector<std::string> headers) {
-  namespace asio = boost::asio;
-  asio::io_context io;
-  asio::ip::tcp::socket s(io);
-  s.connect({asio::ip::make_address("127.0.0.1"), port});
-  std::string req = method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n";
-  for (const auto& h : headers) req += h + "\r\n";
-  if (!body.empty() || method == "PUT" || method == "POST")
-    req += "Content-Length: " + std::to_string(body.size()) + "\r\n";
-  req += "\r\n" + body;
-  asio::write(s, asio::buffer(req));
-  std::string all;
-  boost::system::error_code ec;
-  asio::read(s, asio::dynamic_buffer(all), ec);  // until the server closes
-  HttpReply r;
-  const auto head_end = all.find("\r\n\r\n");
-  if (all.size() < 12 || head_end == std::string::npos) return r;
-  r.status = std::stoi(all.substr(9, 3));
-  std::string head = all.substr(0, head_end);
-  for (char& c : head) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (auto p = head.find("\r\ncontent-type: "); p != std::string::npos) {
-    auto e = head.find("\r\n", p + 2);
-    r.content_type = all.substr(p + 16, (e == std::string::npos ? head.size() : e) - p - 16);
-  }
-  r.body = all.substr(head_end + 4);
-  if (head.find("transfer-encoding: chunked") != std::string::npos) {  // de-chunk
-    std::string out;
-    std::size_t pos = 0;
-    while (pos < r.body.size()) {
-      const auto eol = r.body.find("\r\n", pos);
-      if (eol == std::string::npos) break;
-      const auto n = std::stoul(r.body.substr(pos, eol - pos), nullptr, 16);
-      if (n == 0) break;
-      out += r.body.substr(eol + 2, n);
-      pos = eol + 2 + n + 2;
-    }
-    r.body = out;
-  }
-  boost::system::error_code jec;
-  auto v = json::parse(r.body, jec);
-  if (!jec) r.parsed = std::move(v);
-  return r;
-}
-
-struct RestRig {
-  explicit RestRig(std::chrono::milliseconds emcy_period = {}) {
-    CliOptions cli;
-    cli.demo = true;
-    cli.gateway_id = "test";
-    Config c = merge(Config{}, cli);
-    if (emcy_period.count() > 0) c.networks.at(0).simulation.emcy_period = emcy_period;
-    log = std::make_unique<Logger>(LogLevel::Error);
-    app = std::make_unique<App>(io, c, *log);
-    http::HttpConfig hc;
-    hc.address = "127.0.0.1";
-    hc.port = 0;
-    server = std::make_unique<http::HttpServer>(io, hc);
-    register_rest_routes(*server, *app);
-    app->start();
-    server->start();
-    port = server->bound_port();
-  }
-  ~RestRig() {
-    server->stop();
-    app->stop();
-    io.run_for(50ms);
-  }
-
-  template <typename Pred>
-  bool run_until(Pred pred, std::chrono::milliseconds limit = 10s) {
-    const auto end = std::chrono::steady_clock::now() + limit;
-    while (!pred() && std::chrono::steady_clock::now() < end) io.run_for(10ms);
-    return pred();
-  }
-
-  HttpReply request(std::string method, std::string target, std::string body = {},
-                    std::vector<std::string> headers = {}) {
-    if (!body.empty() && headers.empty()) headers.push_back("Content-Type: application/json");
-    auto f = std::async(std::launch::async, fetch, port, method, target, body, headers);
-    auto ready = [&] { return f.wait_for(0s) == std::future_status::ready; };
-    const bool done = run_until(ready, 10s);
-    EXPECT_TRUE(done) << method << " " << target << ": no answer";
-    if (!done) {
-      // Closing every connection ends the client's read, so the future
-      // (whose destructor waits for the thread) does not block the test.
-      server->stop();
-      run_until(ready, 5s);
-      return {};
-    }
-    return f.get();
-  }
-
-  bool operational(std::uint8_t node) const {
-    const auto* n = app->cache().node(1, node);
-    return n != nullptr && n->state == canopen::NmtState::Operational;
-  }
-  bool all_operational() const { return operational(5) && operational(10) && operational(11); }
-
-  boost::asio::io_context io;
-  std::unique_ptr<Logger> log;
-  std::unique_ptr<App> app;
-  std::unique_ptr<http::HttpServer> server;
-  std::uint16_t port = 0;
-};
+using test::RestRig;
 
 const std::string kNode5 = "/api/v1/networks/1/nodes/5";
 
@@ -189,7 +63,9 @@ TEST(Rest, NodesAndOneNodeWithTpdoValues) {
     EXPECT_TRUE(n.at("configured").as_bool());
     EXPECT_EQ(n.at("bootCount").to_number<int>(), 1);
     EXPECT_TRUE(n.at("lastHeartbeatAgeMs").is_number());
-    EXPECT_TRUE(n.contains("identity"));
+    // Read from the device at boot-up (1000h and 1018h; the drive is a CiA 402 servo drive).
+    ASSERT_TRUE(n.at("identity").is_object()) << json::serialize(n);
+    EXPECT_EQ(n.at("identity").as_object().at("deviceType").to_number<std::uint32_t>(), 0x00020192U);
     EXPECT_TRUE(n.contains("emcyCount"));
   }
   EXPECT_TRUE(saw5);
@@ -419,6 +295,21 @@ TEST(Rest, BusDownIs503) {
   // Back up: requests work again.
   ASSERT_TRUE(rig.app->set_simulated_link(1, true));
   EXPECT_EQ(rig.request("GET", kNode5 + "/sdo/1000/0").status, 200);
+}
+
+TEST(Rest, MetricsWithSdoLatencyHistogram) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
+  ASSERT_EQ(rig.request("GET", kNode5 + "/sdo/1017/0").status, 200);
+  auto m = rig.request("GET", "/metrics");
+  ASSERT_EQ(m.status, 200);
+  EXPECT_THAT(m.content_type, HasSubstr("text/plain"));
+  EXPECT_THAT(m.body, HasSubstr("# TYPE canopen_gateway_sdo_latency_seconds histogram\n"));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_sdo_latency_seconds_bucket{le=\"+Inf\"} "));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_sdo_latency_seconds_count "));
+  EXPECT_THAT(m.body, ::testing::Not(HasSubstr("canopen_gateway_sdo_latency_seconds_count 0\n")));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_sdo_requests_total 1\n"));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_request_auth_failures_total 0\n"));
 }
 
 }  // namespace
