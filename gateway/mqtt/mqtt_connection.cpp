@@ -1,5 +1,7 @@
 #include "mqtt/mqtt_connection.hpp"
 
+#include <netinet/in.h>
+#include <netinet/tcp.h>
 #include <poll.h>
 #include <sys/socket.h>
 
@@ -210,6 +212,12 @@ void MqttConnection::write_done(const boost::system::error_code& ec) {
     }
   }
   flush();
+}
+
+void MqttConnection::ack_now() {
+  if (state_ != State::Up) return;
+  const int one = 1;
+  ::setsockopt(sock().native_handle(), IPPROTO_TCP, TCP_QUICKACK, &one, sizeof one);
 }
 
 void MqttConnection::start_read() {

@@ -70,6 +70,12 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   void open(const Endpoint& ep, std::string connect_packet, std::uint8_t version,
             std::chrono::seconds connect_timeout, std::chrono::seconds keepalive, std::size_t max_packet);
 
+  // Sends the TCP ACK for what was read now instead of the kernel's
+  // delayed ACK (TCP_QUICKACK). For a reader that read but writes nothing
+  // back: a broker with Nagle on (mosquitto's default) holds its next
+  // PUBACKs until that ACK comes, up to the delayed-ACK timeout (40 ms).
+  void ack_now();
+
   std::string& out() { return out_; }
   void flush();
   // Bytes appended but not yet handed to the kernel.

@@ -482,8 +482,13 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
       acks_in_batch = false;
       last_progress = std::chrono::steady_clock::now();
     }
+    const std::uint64_t writes = conn ? conn->writes() : 0;
     drain();
-    if (conn) conn->flush();
+    if (!conn) return;
+    conn->flush();
+    // Nothing written back (the window is still more than half full): ACK
+    // at once, or a Nagle broker holds the PUBACKs we wait for.
+    if (conn && conn->writes() == writes && inflight_q1 > 0) conn->ack_now();
   }
 
   // Every QoS 0 message handed to the kernel has left the queue.
@@ -502,9 +507,13 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     // is written to the queue's files first.
     if (!connected || !conn) return;
     if (queue.flush_pending()) flush_queue();
+    const std::size_t limit = window();
+    // Refill only once at most half the window is in flight: the window
+    // goes out in a few large writes instead of one write per PUBACK read
+    // (each read of the broker's PUBACKs otherwise frees a slot or two).
+    if (inflight_q1 > limit / 2) return;
     draining = true;
     buffer_full = false;
-    const std::size_t limit = window();
     for (;;) {
       bool any = false;
       while (connected && inflight_q1 < limit && queue.next(item)) {

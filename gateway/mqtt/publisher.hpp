@@ -7,7 +7,9 @@
 // them to the socket, all that the window allows in ONE write (the
 // publisher's own MQTT client, mqtt_codec.hpp and mqtt_connection.hpp, on
 // the caller's io_context; no threads). A read of the socket handles all
-// PUBACKs that arrived and refills the window with one more write. So a
+// PUBACKs that arrived; the window is refilled, with one write, once at
+// most half of it is in flight (so a window goes out in a few large writes,
+// not one write per PUBACK read). So a
 // message given to publish() is in the kernel (survives kill -9 of the
 // gateway) once the io thread has finished the handlers ready in the same
 // turn, and before it is sent; a kill -9 loses at most the messages

@@ -88,6 +88,8 @@ class Broker {
   ~Broker() { stop(); }
 
   int port() const { return port_; }
+  // Appended to mosquitto.conf by start() (e.g. a TLS listener).
+  std::string extra_config;
   std::string uri() const { return "tcp://127.0.0.1:" + std::to_string(port_); }
 
   bool start() {
@@ -101,7 +103,8 @@ class Broker {
         << "persistence_location " << dir_.path().string() << "/\n"
         << "autosave_interval 0\n"
         << "max_queued_messages 100000\n"
-        << "user " << (pw != nullptr ? pw->pw_name : "root") << "\n";
+        << "user " << (pw != nullptr ? pw->pw_name : "root") << "\n"
+        << extra_config;
     }
     const auto log = (dir_.path() / "mosquitto.log").string();
     pid_ = ::fork();
