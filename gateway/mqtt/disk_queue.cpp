@@ -254,9 +254,11 @@ DiskQueue::Segment& DiskQueue::writable_segment(std::uint64_t seq, std::uint64_t
   return seg;
 }
 
-std::uint64_t DiskQueue::push(const QueuedMessage& m) {
-  const std::size_t tlen = std::min<std::size_t>(m.topic.size(), 0xffff);
-  const std::size_t body = kBodyFixed + tlen + m.payload.size();
+std::uint64_t DiskQueue::push(const QueuedMessage& m) { return push(m.topic, m.payload, m.qos, m.retained); }
+
+std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained) {
+  const std::size_t tlen = std::min<std::size_t>(topic.size(), 0xffff);
+  const std::size_t body = kBodyFixed + tlen + payload.size();
   const std::uint64_t size = kHeader + body;
   if (size > opts_.max_bytes || body > kMaxBody) {
     ++counters_.dropped_too_big;
@@ -282,11 +284,11 @@ std::uint64_t DiskQueue::push(const QueuedMessage& m) {
   put_le(p, body, 4);
   char* b = p + kHeader;
   put_le(b, seq, 8);
-  b[8] = static_cast<char>(m.qos == 0 ? 0 : 1);
-  b[9] = static_cast<char>(m.retained ? 1 : 0);
+  b[8] = static_cast<char>(qos == 0 ? 0 : 1);
+  b[9] = static_cast<char>(retained ? 1 : 0);
   put_le(b + 10, tlen, 2);
-  std::memcpy(b + kBodyFixed, m.topic.data(), tlen);
-  if (!m.payload.empty()) std::memcpy(b + kBodyFixed + tlen, m.payload.data(), m.payload.size());
+  std::memcpy(b + kBodyFixed, topic.data(), tlen);
+  if (!payload.empty()) std::memcpy(b + kBodyFixed + tlen, payload.data(), payload.size());
   put_le(p + 4, crc32(b, body), 4);
 
   if (!opts_.buffered_writes) {
@@ -299,8 +301,8 @@ std::uint64_t DiskQueue::push(const QueuedMessage& m) {
     }
     seg.written = seg.size + size;
   }
-  entries_.push_back(Entry{first, seg.size, static_cast<std::uint32_t>(size), static_cast<std::uint8_t>(m.qos == 0 ? 0 : 1), State::Live});
-  (m.qos == 0 ? live_qos0_ : live_qos1_).push_back(seq);
+  entries_.push_back(Entry{first, seg.size, static_cast<std::uint32_t>(size), static_cast<std::uint8_t>(qos == 0 ? 0 : 1), State::Live});
+  (qos == 0 ? live_qos0_ : live_qos1_).push_back(seq);
   seg.size += size;
   seg.dirty = true;
   counters_.disk_bytes += size;

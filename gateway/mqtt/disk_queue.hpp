@@ -58,6 +58,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 
 namespace gateway::mqtt {
 
@@ -109,6 +110,8 @@ class DiskQueue {
   // Appends (dropping older messages per the policy if full). Returns the
   // message's sequence number, or 0 when refused as too big.
   std::uint64_t push(const QueuedMessage& m);
+  // The same without building a QueuedMessage (the publisher's hot path).
+  std::uint64_t push(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained);
 
   // The next message not yet handed out since open or the last rewind(), in
   // order; false when there is none. Reads the record back from the file.

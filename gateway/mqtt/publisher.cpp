@@ -601,10 +601,10 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     }
   }
 
-  void publish(const QueuedMessage& m) {
+  void publish(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained) {
     ++counters.published;
     try {
-      queue.push(m);
+      queue.push(topic, payload, qos, retained);
     } catch (const std::exception& e) {
       ++counters.dropped;
       log.error(std::string("mqtt: queue write failed: ") + e.what());
@@ -819,15 +819,11 @@ void MqttPublisher::publish(const EncodedEventPtr& ev) { publish(ev, impl_->cfg.
 void MqttPublisher::publish(const EncodedEventPtr& ev, PayloadFormat format) {
   if (!ev) return;
   const auto k = static_cast<std::size_t>(ev->kind);
-  QueuedMessage m;
-  m.topic = ev->topic;
-  m.payload = format == PayloadFormat::Json ? ev->json : ev->binary;
-  m.qos = k < kEventKindCount ? impl_->cfg.qos[k] : 1;
-  m.retained = ev->retained;
-  impl_->publish(m);
+  impl_->publish(ev->topic, format == PayloadFormat::Json ? ev->json : ev->binary,
+                 k < kEventKindCount ? impl_->cfg.qos[k] : 1, ev->retained);
 }
 
-void MqttPublisher::publish(const QueuedMessage& m) { impl_->publish(m); }
+void MqttPublisher::publish(const QueuedMessage& m) { impl_->publish(m.topic, m.payload, m.qos, m.retained); }
 
 MqttPublisher::Counters MqttPublisher::counters() const { return impl_->snapshot(); }
 const DiskQueue::Counters& MqttPublisher::queue_counters() const { return impl_->queue.counters(); }
