@@ -15,7 +15,7 @@
 // flush(true) writes the position (as does deleting a fully acked segment,
 // and the destructor). The owner must call flush() soon (MqttPublisher:
 // once per io loop turn, from a handler posted by the first publish of the
-// turn, before the messages go to Paho), and push() flushes by itself
+// turn, before the messages go to the socket), and push() flushes by itself
 // before the buffer would exceed write_buffer_bytes. So a kill -9 loses at
 // most the records pushed since the last flush(); a position not yet
 // written only makes already acked messages come again after a crash.
