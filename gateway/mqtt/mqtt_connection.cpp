@@ -218,6 +218,7 @@ void MqttConnection::ack_now() {
   if (state_ != State::Up) return;
   const int one = 1;
   ::setsockopt(sock().native_handle(), IPPROTO_TCP, TCP_QUICKACK, &one, sizeof one);
+  read_again_ = true;  // on_read() tries one more non-blocking read
 }
 
 void MqttConnection::start_read() {
@@ -235,6 +236,27 @@ void MqttConnection::on_read(const boost::system::error_code& ec, std::size_t n)
     fail(ec == asio::error::eof ? std::string("connection closed by the broker") : "read: " + ec.message());
     return;
   }
+  if (!consume(n)) return;
+  // After ack_now() the broker's held PUBACKs were usually delivered within
+  // that very syscall (loopback): take them now rather than after another
+  // wakeup.
+  while (read_again_ && !tls_ && state_ != State::Closed) {
+    read_again_ = false;
+    boost::system::error_code rec;
+    const std::size_t m = tcp_.receive(asio::buffer(rbuf_), 0, rec);
+    if (rec == asio::error::would_block || rec == asio::error::try_again) break;
+    if (rec) {
+      fail(rec == asio::error::eof ? std::string("connection closed by the broker") : "read: " + rec.message());
+      return;
+    }
+    if (!consume(m)) return;
+  }
+  read_again_ = false;
+  if (state_ != State::Closed) start_read();
+}
+
+// Decodes and dispatches one chunk; false when the connection closed.
+bool MqttConnection::consume(std::size_t n) {
   ++reads_;
   last_read_ = Clock::now();
   ping_outstanding_ = false;  // anything from the broker shows it is alive
@@ -243,15 +265,15 @@ void MqttConnection::on_read(const boost::system::error_code& ec, std::size_t n)
   bool any = false;
   while (decoder_.next(p)) {
     handle(p);
-    if (state_ == State::Closed) return;
+    if (state_ == State::Closed) return false;
     any = true;
   }
   if (decoder_.error() != codec::Error::None) {
     fail(std::string("malformed data from the broker: ") + codec::to_string(decoder_.error()));
-    return;
+    return false;
   }
   if (any && state_ == State::Up && cb_.on_batch_end) cb_.on_batch_end();
-  if (state_ != State::Closed) start_read();
+  return state_ != State::Closed;
 }
 
 void MqttConnection::handle(const codec::Packet& p) {

@@ -74,6 +74,9 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   // delayed ACK (TCP_QUICKACK). For a reader that read but writes nothing
   // back: a broker with Nagle on (mosquitto's default) holds its next
   // PUBACKs until that ACK comes, up to the delayed-ACK timeout (40 ms).
+  // Called from on_batch_end, it also makes the read loop try one more
+  // non-blocking read before it waits (what the ACK released is often
+  // there already).
   void ack_now();
 
   std::string& out() { return out_; }
@@ -100,6 +103,7 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   void on_connected();
   void start_read();
   void on_read(const boost::system::error_code& ec, std::size_t n);
+  bool consume(std::size_t n);
   void handle(const codec::Packet& p);
   void fail(std::string why);
   void arm_keepalive();
@@ -126,6 +130,7 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   std::chrono::seconds keepalive_{0};
   std::chrono::steady_clock::time_point last_read_{}, last_write_{};
   bool ping_outstanding_ = false;
+  bool read_again_ = false;  // set by ack_now(): read once more before waiting
   std::uint64_t writes_ = 0, reads_ = 0;
 };
 
