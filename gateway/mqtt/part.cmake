@@ -2,12 +2,12 @@
 # TCP/TLS connection on Boost.Asio, and the publisher that also takes
 # requests (see mqtt/publisher.hpp).
 find_package(OpenSSL REQUIRED)
+include(${CMAKE_CURRENT_LIST_DIR}/codec.cmake)
 add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/disk_queue.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/mqtt_codec.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mqtt_connection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp)
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_mqtt
-  PUBLIC gateway_lib Boost::json OpenSSL::SSL OpenSSL::Crypto
+  PUBLIC gateway_lib gateway_mqtt_codec Boost::json OpenSSL::SSL OpenSSL::Crypto
   PRIVATE canopen_options)
