@@ -98,7 +98,7 @@ constexpr std::uint64_t kControlPid = ~std::uint64_t{0};  // status, replies, SU
 struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestHandler h)
       : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(buffered(cfg.queue)),
-        sync_timer(io_ctx), retry_timer(io_ctx), drain_timer(io_ctx), pid_slot(65536, kFreePid) {
+        sync_timer(io_ctx), retry_timer(io_ctx), pid_slot(65536, kFreePid) {
     uri = normalize_server_uri(cfg.server_uri);
     endpoint = parse_endpoint(uri);
     version = cfg.mqtt_version >= 5 ? codec::kMqtt5 : codec::kMqtt311;
@@ -113,8 +113,6 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   DiskQueue queue;
   asio::steady_timer sync_timer;
   asio::steady_timer retry_timer;
-  asio::steady_timer drain_timer;
-  bool drain_retry_armed = false;
   static constexpr std::chrono::seconds kStallTimeout{30};
   std::chrono::steady_clock::time_point last_progress{};
   std::string uri;
@@ -184,7 +182,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   std::size_t in_flight() const { return inflight_q1 + unwritten_q0.size(); }
 
   void check_stall() {
-    if (!connected || drain_retry_armed) return;
+    if (!connected) return;
     const auto now = std::chrono::steady_clock::now();
     const bool idle_but_pending = in_flight() == 0 && queue.depth() > 0;
     const bool no_progress = in_flight() > 0 && now - last_progress > kStallTimeout;
@@ -564,18 +562,6 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     draining = false;
   }
 
-  void arm_drain_retry() {
-    if (drain_retry_armed) return;
-    drain_retry_armed = true;
-    drain_timer.expires_after(std::chrono::milliseconds(10));
-    drain_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
-      auto self = weak.lock();
-      if (ec || !self) return;
-      self->drain_retry_armed = false;
-      self->drain();
-    });
-  }
-
   // Once per io loop turn (posted by the first publish after the last
   // one): write the records the queue buffered, then send them. So a
   // message is in the kernel before it is sent, and the turn's messages go
@@ -764,7 +750,6 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     running = false;
     sync_timer.cancel();
     retry_timer.cancel();
-    drain_timer.cancel();
     if (conn && connected) {
       // The offline status (retained) and DISCONNECT, then wait for the
       // broker to close: it handles them in order, so the Will is not sent.
