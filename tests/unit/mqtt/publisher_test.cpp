@@ -594,3 +594,51 @@ TEST_F(MqttPublisherTest, TlsWithServerVerification) {
   EXPECT_FALSE(counters().connected);
   EXPECT_EQ(counters().connects, 0u);
 }
+
+// connect_timeout covers the CONNACK: a server that accepts TCP but never
+// answers is given up on and tried again with backoff.
+TEST_F(MqttPublisherTest, ConnectTimeoutWithoutConnack) {
+  int lfd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(lfd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(lfd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::listen(lfd, 8);
+  std::atomic<int> accepted{0};
+  std::atomic<bool> stop{false};
+  std::thread mute([&] {
+    std::vector<int> conns;
+    while (!stop) {
+      pollfd p{lfd, POLLIN, 0};
+      if (::poll(&p, 1, 50) > 0) {
+        int cfd = ::accept(lfd, nullptr, nullptr);
+        if (cfd >= 0) {
+          ++accepted;
+          conns.push_back(cfd);
+        }
+      }
+    }
+    for (int cfd : conns) ::close(cfd);
+  });
+  MqttConfig c;
+  c.server_uri = "tcp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  c.client_id = "timeout-test";
+  c.gateway_id = kGw;
+  c.queue.dir = queue_dir_.path() / "q";
+  c.connect_timeout = 1s;
+  c.reconnect_min = 100ms;
+  c.reconnect_max = 200ms;
+  io_.call([&] {
+    pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_);
+    pub_->start();
+  });
+  EXPECT_TRUE(eventually([&] { return accepted >= 2; }, 5s)) << "no second attempt after the timeout";
+  EXPECT_FALSE(counters().connected);
+  EXPECT_EQ(counters().connects, 0u);
+  io_.call([&] { pub_.reset(); });
+  stop = true;
+  mute.join();
+  ::close(lfd);
+}
