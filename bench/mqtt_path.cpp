@@ -2,11 +2,11 @@
 // PDO frames of a CiA 402 drive (node 5, TPDO2: Statusword u16 + Modes of
 // operation display i8, decoded with the EDS) go through canopen::Network,
 // the event pipeline (state cache, history, one JSON + protobuf encoding)
-// and the MQTT publisher (disk queue, Paho) to a real broker, until the
-// broker has acknowledged every one.
+// and the MQTT publisher (disk queue, its own MQTT client) to a real
+// broker, until the broker has acknowledged every one.
 //
 // Prints the gateway's CPU time per event (user + system of the whole
-// process, Paho's threads included, from getrusage) and events per second.
+// process, from getrusage) and events per second.
 // Not a test: numbers for people (bench/README.md).
 //
 //   mqtt_path_bench URI EVENTS QUEUE_DIR [QOS]
@@ -82,6 +82,7 @@ int main(int argc, char** argv) {
     return 1;
   }
   const auto base_acked = publisher.counters().acked;
+  const auto base_writes = publisher.counters().socket_writes;
 
   const double cpu0 = cpu_seconds();
   const auto t0 = std::chrono::steady_clock::now();
@@ -101,6 +102,7 @@ int main(int argc, char** argv) {
   const auto t1 = std::chrono::steady_clock::now();
   const double cpu = cpu_seconds() - cpu0;
   const auto acked = publisher.counters().acked - base_acked;
+  const auto writes = publisher.counters().socket_writes - base_writes;
   const double wall = std::chrono::duration<double>(t1 - t0).count();
   publisher.stop();
   std::printf("events %llu acked %llu qos %d\n", static_cast<unsigned long long>(events),
@@ -109,5 +111,7 @@ int main(int argc, char** argv) {
   std::printf("of which frame -> queued (io thread, synchronous): %.2f us\n",
               cpu_feed / static_cast<double>(events) * 1e6);
   std::printf("events per second to the broker: %.0f\n", static_cast<double>(acked) / wall);
+  std::printf("socket writes: %llu (%.1f events per write)\n", static_cast<unsigned long long>(writes),
+              writes > 0 ? static_cast<double>(acked) / static_cast<double>(writes) : 0.0);
   return acked == events ? 0 : 1;
 }

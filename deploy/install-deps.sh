@@ -9,7 +9,7 @@ PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config git clang libclang-rt-14-dev
   # libraries (Boost 1.81 from Debian's versioned packages; never libboost-all-dev, which is 1.74)
   libboost1.81-dev libboost-json1.81-dev libboost-url1.81-dev
-  libpaho-mqtt-dev libpaho-mqttpp-dev
+  libpaho-mqtt-dev libpaho-mqttpp-dev  # the MQTT tests' reference client only
   libprotobuf-dev protobuf-compiler
   libgtest-dev libgmock-dev libbenchmark-dev
   libyaml-cpp-dev libssl-dev openssl

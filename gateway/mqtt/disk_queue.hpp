@@ -15,7 +15,7 @@
 // flush(true) writes the position (as does deleting a fully acked segment,
 // and the destructor). The owner must call flush() soon (MqttPublisher:
 // once per io loop turn, from a handler posted by the first publish of the
-// turn, before the messages go to Paho), and push() flushes by itself
+// turn, before the messages go to the socket), and push() flushes by itself
 // before the buffer would exceed write_buffer_bytes. So a kill -9 loses at
 // most the records pushed since the last flush(); a position not yet
 // written only makes already acked messages come again after a crash.
@@ -58,6 +58,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <string_view>
 
 namespace gateway::mqtt {
 
@@ -109,6 +110,8 @@ class DiskQueue {
   // Appends (dropping older messages per the policy if full). Returns the
   // message's sequence number, or 0 when refused as too big.
   std::uint64_t push(const QueuedMessage& m);
+  // The same without building a QueuedMessage (the publisher's hot path).
+  std::uint64_t push(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained);
 
   // The next message not yet handed out since open or the last rewind(), in
   // order; false when there is none. Reads the record back from the file.

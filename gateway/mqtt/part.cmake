@@ -1,10 +1,13 @@
-# MQTT transport: a crash-safe disk queue and the Paho-based publisher that
-# also takes requests (see mqtt/publisher.hpp).
-find_package(PahoMqttCpp REQUIRED)
+# MQTT transport: a crash-safe disk queue, a sans-I/O MQTT 3.1.1/5 codec, a
+# TCP/TLS connection on Boost.Asio, and the publisher that also takes
+# requests (see mqtt/publisher.hpp).
+find_package(OpenSSL REQUIRED)
+include(${CMAKE_CURRENT_LIST_DIR}/codec.cmake)
 add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/disk_queue.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mqtt_connection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp)
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_mqtt
-  PUBLIC gateway_lib PahoMqttCpp::paho-mqttpp3 Boost::json
+  PUBLIC gateway_lib gateway_mqtt_codec Boost::json OpenSSL::SSL OpenSSL::Crypto
   PRIVATE canopen_options)

@@ -1,8 +1,10 @@
 #include "mqtt/publisher.hpp"
 
-#include <mqtt/async_client.h>
+#include "mqtt/mqtt_codec.hpp"
+#include "mqtt/mqtt_connection.hpp"
 
 #include <boost/asio/post.hpp>
+#include <boost/asio/ssl/context.hpp>
 #include <boost/asio/steady_timer.hpp>
 #include <boost/json.hpp>
 
@@ -10,10 +12,8 @@
 #include <cctype>
 #include <charconv>
 #include <cstdint>
-#include <mutex>
 #include <optional>
 #include <stdexcept>
-#include <unordered_map>
 #include <vector>
 
 namespace gateway::mqtt {
@@ -21,9 +21,6 @@ namespace {
 
 namespace asio = boost::asio;
 namespace json = boost::json;
-
-void* to_context(std::uint64_t v) { return reinterpret_cast<void*>(static_cast<std::uintptr_t>(v)); }
-std::uint64_t from_context(void* p) { return static_cast<std::uint64_t>(reinterpret_cast<std::uintptr_t>(p)); }
 
 // "Bearer abc" -> "abc"; a bare token stays as it is.
 std::string_view strip_bearer(std::string_view v) {
@@ -77,41 +74,6 @@ std::string normalize_server_uri(const std::string& uri) {
   throw std::invalid_argument("MQTT URI must start with tcp://, ssl://, mqtt:// or mqtts://: " + uri);
 }
 
-// Delivery results collected from Paho's threads: the first one after the
-// io thread took the last batch posts one handler, which takes all that
-// arrived by then (one post per batch of PUBACKs, not per message).
-// Posting at once matters: waiting for a bigger batch keeps the window
-// from being refilled, and with nothing to send the client's delayed TCP
-// ACKs meet the broker's Nagle on PUBACKs (~40 ms stalls).
-struct DeliveryInbox {
-  struct Result {
-    std::uint64_t context;
-    bool ok;
-    int reason;
-  };
-  std::mutex mutex;
-  std::vector<Result> results;
-  bool posted = false;  // a handler is posted and has not taken them yet
-};
-
-// Paho threads call these; they only post to the io thread, holding the
-// Impl weakly so a late callback after destruction does nothing.
-class PahoListener : public ::mqtt::iaction_listener {
- public:
-  enum class Kind { Connect, Delivery };
-  PahoListener(asio::io_context& io, std::weak_ptr<MqttPublisher::Impl> impl, Kind kind,
-               std::shared_ptr<DeliveryInbox> inbox = {})
-      : io_(io), impl_(std::move(impl)), kind_(kind), inbox_(std::move(inbox)) {}
-  void on_success(const ::mqtt::token& tok) override;
-  void on_failure(const ::mqtt::token& tok) override;
-
- private:
-  void deliver(std::uint64_t context, bool ok, int reason);
-  asio::io_context& io_;
-  std::weak_ptr<MqttPublisher::Impl> impl_;
-  Kind kind_;
-  std::shared_ptr<DeliveryInbox> inbox_;
-};
 
 namespace {
 // The publisher batches the queue's writes (see publisher.hpp, Delivery).
@@ -119,14 +81,27 @@ DiskQueueOptions buffered(DiskQueueOptions o) {
   o.buffered_writes = true;
   return o;
 }
+
+// Largest packet the publisher accepts from the broker (told to it under
+// MQTT 5 as Maximum Packet Size); requests are small.
+constexpr std::size_t kMaxIncomingPacket = 4u << 20;
+// Receive Maximum told to the broker: requests it may have unacked with us.
+constexpr std::uint16_t kOurReceiveMaximum = 64;
+// Stop encoding once this much waits for the socket (QoS 0 is not bounded
+// by the window); drain() resumes when it has gone out.
+constexpr std::size_t kMaxBuffered = 256u << 10;
+// pid_slot values besides a queue sequence number.
+constexpr std::uint64_t kFreePid = 0;
+constexpr std::uint64_t kControlPid = ~std::uint64_t{0};  // status, replies, SUBSCRIBE
 }  // namespace
 
 struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestHandler h)
       : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(buffered(cfg.queue)),
-        sync_timer(io_ctx), retry_timer(io_ctx), drain_timer(io_ctx) {
+        sync_timer(io_ctx), retry_timer(io_ctx), pid_slot(65536, kFreePid) {
     uri = normalize_server_uri(cfg.server_uri);
-    version = cfg.mqtt_version >= 5 ? 5 : 4;
+    endpoint = parse_endpoint(uri);
+    version = cfg.mqtt_version >= 5 ? codec::kMqtt5 : codec::kMqtt311;
     prefix = "canopen/" + cfg.gateway_id + "/";
     if (cfg.inflight_window == 0) cfg.inflight_window = 1;
   }
@@ -138,19 +113,22 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   DiskQueue queue;
   asio::steady_timer sync_timer;
   asio::steady_timer retry_timer;
-  asio::steady_timer drain_timer;
-  bool drain_retry_armed = false;
   static constexpr std::chrono::seconds kStallTimeout{30};
   std::chrono::steady_clock::time_point last_progress{};
   std::string uri;
+  Endpoint endpoint;
+  std::unique_ptr<asio::ssl::context> tls_ctx;
   std::string prefix;
-  int version = 5;
-  // Listeners live as long as the Impl, longer than any client they serve.
-  std::unique_ptr<PahoListener> connect_listener, delivery_listener;
-  std::shared_ptr<DeliveryInbox> inbox = std::make_shared<DeliveryInbox>();
-  std::vector<DeliveryInbox::Result> delivered;  // io thread's swap buffer
+  std::uint8_t version = codec::kMqtt5;
+  std::shared_ptr<MqttConnection> conn;
+  std::uint64_t conn_gen = 0;  // which connection callbacks belong to
+  bool buffer_full = false;    // drain() stopped at kMaxBuffered
   bool pump_posted = false;
+  bool draining = false;  // inside drain(): on_drained must not re-enter it
   std::size_t receive_max = 0;  // the broker's Receive Maximum (MQTT 5), 0: none
+  std::uint8_t max_qos = 1;     // the broker's Maximum QoS (MQTT 5)
+  bool retain_available = true;
+  std::size_t max_packet = 0;   // the broker's Maximum Packet Size, 0: none
   // The in-flight window; under the broker's Receive Maximum, leaving room
   // for the status message and request replies.
   std::size_t window() const {
@@ -158,89 +136,36 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     const std::size_t cap = receive_max > 8 ? receive_max - 4 : receive_max;
     return std::min(cap, cfg.inflight_window);
   }
-  std::unique_ptr<::mqtt::async_client> client;
   bool running = false;
   bool connected = false;
   bool connecting = false;
-  std::uint64_t attempt = 0;       // id of the current connect attempt
-  unsigned failures = 0;           // consecutive, for the backoff
-  // seq -> connection epoch it was sent on; a Paho context is
-  // (seq << 16 | epoch) so a late callback for an earlier send of the same
-  // seq does not retire the current one.
-  std::unordered_map<std::uint64_t, std::uint16_t> in_flight;
-  std::uint16_t epoch = 0;
+  unsigned failures = 0;  // consecutive, for the backoff
+  // Packet id -> queue seq (or kControlPid) while its PUBACK is due; one
+  // flat table so the hot path never allocates. Reset per connection.
+  std::vector<std::uint64_t> pid_slot;
+  std::uint16_t next_pid = 0;
+  std::size_t inflight_q1 = 0;               // queue messages awaiting PUBACK
+  std::vector<std::uint64_t> unwritten_q0;   // QoS 0 seqs not yet in the kernel
+  std::uint64_t socket_writes_before = 0;    // writes of earlier connections
+  DiskQueue::Item item;                      // reused by drain()
+  std::vector<std::uint8_t> suback_codes;
+  std::string scratch;                       // stop()'s last packets
+  bool acks_in_batch = false;
   Counters counters;
-
-  void make_client() {
-    ::mqtt::create_options co(version == 5 ? MQTTVERSION_5 : MQTTVERSION_3_1_1);
-    co.set_send_while_disconnected(false);
-    // The DiskQueue is the buffer; Paho's limit also counts commands queued
-    // while connected, so it must hold the window plus status and replies.
-    co.set_max_buffered_messages(static_cast<int>(cfg.inflight_window + 64));
-    client = std::make_unique<::mqtt::async_client>(uri, cfg.client_id, co, nullptr);  // no persistence
-    std::weak_ptr<Impl> weak = weak_from_this();
-    asio::io_context* ioc = &io;
-    client->set_connection_lost_handler([weak, ioc](const std::string&) {
-      asio::post(*ioc, [weak] {
-        if (auto self = weak.lock()) self->on_lost("connection lost");
-      });
-    });
-    client->set_disconnected_handler([weak, ioc](const ::mqtt::properties&, ::mqtt::ReasonCode rc) {
-      asio::post(*ioc, [weak, rc] {
-        if (auto self = weak.lock()) self->on_lost("broker disconnected, reason " + std::to_string(static_cast<int>(rc)));
-      });
-    });
-    client->set_message_callback([weak, ioc](::mqtt::const_message_ptr msg) {
-      asio::post(*ioc, [weak, msg = std::move(msg)] {
-        if (auto self = weak.lock()) self->on_request(*msg);
-      });
-    });
-  }
-
-  ::mqtt::connect_options connect_options() const {
-    ::mqtt::connect_options o;
-    o.set_mqtt_version(version == 5 ? MQTTVERSION_5 : MQTTVERSION_3_1_1);
-    if (version == 5)
-      o.set_clean_start(true);
-    else
-      o.set_clean_session(true);
-    o.set_keep_alive_interval(cfg.keepalive);
-    o.set_connect_timeout(cfg.connect_timeout);
-    o.set_automatic_reconnect(false);  // ours, so the queue drives resends
-    o.set_max_inflight(static_cast<int>(cfg.inflight_window + 16));
-    if (!cfg.username.empty()) o.set_user_name(cfg.username);
-    if (!cfg.password.empty()) o.set_password(cfg.password);
-    o.set_will(::mqtt::will_options(status_topic(), cfg.offline_payload, 1, true));
-    if (uri.rfind("ssl://", 0) == 0) {
-      ::mqtt::ssl_options ssl;
-      if (!cfg.ca_file.empty()) ssl.set_trust_store(cfg.ca_file);
-      if (!cfg.cert_file.empty()) ssl.set_key_store(cfg.cert_file);
-      if (!cfg.key_file.empty()) ssl.set_private_key(cfg.key_file);
-      if (!cfg.key_password.empty()) ssl.set_private_key_password(cfg.key_password);
-      ssl.set_enable_server_cert_auth(cfg.verify_server);
-      ssl.set_verify(cfg.verify_server);
-      o.set_ssl(std::move(ssl));
-    }
-    return o;
-  }
 
   std::string status_topic() const { return prefix + "status"; }
 
   void start() {
     if (running) return;
     running = true;
-    std::weak_ptr<Impl> weak = weak_from_this();
-    connect_listener = std::make_unique<PahoListener>(io, weak, PahoListener::Kind::Connect);
-    delivery_listener = std::make_unique<PahoListener>(io, weak, PahoListener::Kind::Delivery, inbox);
-    make_client();
     arm_sync();
     connect();
   }
 
   // Every sync_interval (or 1 s without syncing): fdatasync the queue, and
-  // unstick delivery if Paho lost track of a message (no token pending yet
-  // messages handed out, or no PUBACK for stall_timeout): resend from the
-  // oldest unacked, as after a reconnect.
+  // unstick delivery if it stopped (no PUBACK for kStallTimeout while
+  // messages are in flight, or messages pending with none in flight):
+  // resend from the oldest unacked, as after a reconnect.
   void arm_sync() {
     const auto period = cfg.sync_interval.count() > 0 ? cfg.sync_interval : std::chrono::milliseconds(1000);
     sync_timer.expires_after(period);
@@ -254,32 +179,121 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     });
   }
 
+  std::size_t in_flight() const { return inflight_q1 + unwritten_q0.size(); }
+
   void check_stall() {
-    if (!connected || drain_retry_armed) return;
+    if (!connected) return;
     const auto now = std::chrono::steady_clock::now();
-    const bool idle_but_pending = in_flight.empty() && queue.depth() > 0;
-    const bool no_progress = !in_flight.empty() && now - last_progress > kStallTimeout;
+    const bool idle_but_pending = in_flight() == 0 && queue.depth() > 0;
+    const bool no_progress = in_flight() > 0 && now - last_progress > kStallTimeout;
     if (!idle_but_pending && !no_progress) return;
-    log.warn("mqtt: delivery stalled with " + std::to_string(in_flight.size()) + " in flight; resending from " +
+    log.warn("mqtt: delivery stalled with " + std::to_string(in_flight()) + " in flight; resending from " +
              std::to_string(queue.head_seq()));
-    in_flight.clear();
-    ++epoch;
+    forget_in_flight(false);
     last_progress = now;
     queue.rewind();
     drain();
   }
 
+  // Forgets what is in flight (it will be sent again after a rewind).
+  // Packet ids keep counting up, so a late PUBACK for a forgotten one
+  // finds a free slot and is ignored.
+  void forget_in_flight(bool control_too) {
+    for (auto& s : pid_slot)
+      if (s != kFreePid && (control_too || s != kControlPid)) s = kFreePid;
+    inflight_q1 = 0;
+    unwritten_q0.clear();
+  }
+
+  std::uint16_t alloc_pid() {
+    for (int i = 0; i < 65535; ++i) {
+      if (++next_pid == 0) next_pid = 1;
+      if (pid_slot[next_pid] == kFreePid) return next_pid;
+    }
+    return 0;
+  }
+
+  bool ensure_tls() {
+    if (!endpoint.tls || tls_ctx) return true;
+    try {
+      auto ctx = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_client);
+      if (!cfg.ca_file.empty())
+        ctx->load_verify_file(cfg.ca_file);
+      else
+        ctx->set_default_verify_paths();
+      if (!cfg.key_password.empty())
+        ctx->set_password_callback([pw = cfg.key_password](std::size_t, asio::ssl::context::password_purpose) {
+          return pw;
+        });
+      if (!cfg.cert_file.empty()) ctx->use_certificate_chain_file(cfg.cert_file);
+      if (!cfg.key_file.empty()) ctx->use_private_key_file(cfg.key_file, asio::ssl::context::pem);
+      tls_ctx = std::move(ctx);
+      return true;
+    } catch (const std::exception& e) {
+      log.error(std::string("mqtt: TLS setup for ") + uri + " failed: " + e.what());
+      return false;
+    }
+  }
+
   void connect() {
     if (!running || connected || connecting) return;
-    connecting = true;
-    ++attempt;
-    try {
-      client->connect(connect_options(), to_context(attempt), *connect_listener);
-    } catch (const std::exception& e) {
-      connecting = false;
-      log.warn(std::string("mqtt: connect to ") + uri + " failed: " + e.what());
+    if (!ensure_tls()) {
       schedule_retry();
+      return;
     }
+    codec::ConnectOptions o;
+    o.version = version;
+    o.clean_start = true;  // the queue, not the broker, holds the backlog
+    o.keepalive_s = static_cast<std::uint16_t>(std::clamp<long long>(cfg.keepalive.count(), 0, 65535));
+    o.client_id = cfg.client_id;
+    const std::string will_topic = status_topic();
+    o.will = codec::Will{will_topic, cfg.offline_payload, 1, true};
+    if (!cfg.username.empty()) o.username = cfg.username;
+    if (!cfg.password.empty()) o.password = cfg.password;
+    if (version == codec::kMqtt5) {
+      o.session_expiry = 0;
+      o.receive_maximum = kOurReceiveMaximum;
+      o.maximum_packet_size = static_cast<std::uint32_t>(kMaxIncomingPacket);
+    }
+    std::string packet;
+    if (auto e = codec::encode_connect(packet, o); e != codec::Error::None) {
+      log.error(std::string("mqtt: cannot build CONNECT (client id, user, will): ") + codec::to_string(e));
+      schedule_retry();
+      return;
+    }
+    connecting = true;
+    const std::uint64_t c = ++conn_gen;
+    std::weak_ptr<Impl> weak = weak_from_this();
+    MqttConnection::Callbacks cb;
+    // Each callback checks that its connection is still the current one.
+    auto current = [weak](std::uint64_t gen) -> std::shared_ptr<Impl> {
+      auto self = weak.lock();
+      return self && self->conn && self->conn_gen == gen ? self : nullptr;
+    };
+    cb.on_connack = [current, c](const codec::Connack& ca) {
+      if (auto self = current(c)) self->on_connack(ca);
+    };
+    cb.on_packet = [current, c](const codec::Packet& p) {
+      if (auto self = current(c)) self->on_packet(p);
+    };
+    cb.on_batch_end = [current, c] {
+      if (auto self = current(c)) self->on_batch_end();
+    };
+    cb.on_drained = [current, c] {
+      if (auto self = current(c)) self->on_drained();
+    };
+    cb.on_closed = [current, c](const std::string& why) {
+      if (auto self = current(c)) self->on_closed(why);
+    };
+    conn = std::make_shared<MqttConnection>(io, tls_ctx.get(), cfg.verify_server, std::move(cb));
+    conn->open(endpoint, std::move(packet), version, cfg.connect_timeout, cfg.keepalive, kMaxIncomingPacket);
+  }
+
+  void drop_connection() {
+    if (!conn) return;
+    socket_writes_before += conn->writes();
+    conn->close();
+    conn.reset();
   }
 
   void schedule_retry() {
@@ -296,141 +310,262 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     });
   }
 
-  void on_connect_result(std::uint64_t id, bool ok, int rc, int reason) {
-    if (id != attempt || !connecting) return;  // a stale attempt
+  // The connection failed before or after CONNACK, or the broker closed it.
+  void on_closed(const std::string& why) {
+    drop_connection();
+    if (connecting) {
+      connecting = false;
+      if (!running) return;
+      if (failures == 0 || log.enabled(LogLevel::Debug)) log.warn("mqtt: connect to " + uri + " failed: " + why + ", retrying");
+      schedule_retry();
+      return;
+    }
+    on_lost(why);
+  }
+
+  void on_connack(const codec::Connack& ca) {
     connecting = false;
-    if (!running) return;
-    if (!ok) {
+    if (!running) {
+      drop_connection();
+      return;
+    }
+    if (ca.code != 0) {
+      drop_connection();
       // The broker refuses MQTT 5: v5 reason 0x84, or a 3.1.1 broker's
       // CONNACK code 1 (unacceptable protocol version).
-      if (version == 5 && cfg.mqtt_version >= 5 && (reason == 0x84 || rc == 1 || rc == 0x84)) {
+      if (version == codec::kMqtt5 && cfg.mqtt_version >= 5 && (ca.code == 0x84 || ca.code == 1)) {
         log.warn("mqtt: broker " + uri + " refuses MQTT 5, falling back to 3.1.1");
-        version = 4;
-        make_client();
+        version = codec::kMqtt311;
         connect();
         return;
       }
       if (failures == 0 || log.enabled(LogLevel::Debug))
-        log.warn("mqtt: connect to " + uri + " failed (rc " + std::to_string(rc) + ", reason " +
-                 std::to_string(reason) + "), retrying");
+        log.warn("mqtt: connect to " + uri + " refused (code " + std::to_string(ca.code) + "), retrying");
       schedule_retry();
       return;
     }
+    const bool v5 = version == codec::kMqtt5;
+    receive_max = v5 ? ca.receive_maximum : 0;
+    max_qos = v5 ? std::min<std::uint8_t>(ca.maximum_qos, 1) : 1;
+    retain_available = v5 ? ca.retain_available : true;
+    max_packet = v5 && ca.maximum_packet_size ? *ca.maximum_packet_size : 0;
     connected = true;
     failures = 0;
     if (counters.connects++ > 0) ++counters.reconnects;
-    log.info("mqtt: connected to " + uri + " with MQTT " + (version == 5 ? "5" : "3.1.1") +
+    log.info("mqtt: connected to " + uri + " with MQTT " + (v5 ? "5" : "3.1.1") +
              (receive_max > 0 ? ", receive maximum " + std::to_string(receive_max) : std::string()));
-    try {
-      auto online = ::mqtt::make_message(status_topic(), cfg.online_payload, 1, true);
-      client->publish(online);
-      if (cfg.accept_requests) {
-        for (const char* suffix : {"/+/+/sdo/read", "/+/+/sdo/write", "/+/+/nmt"}) {
-          std::string filter = "canopen/" + cfg.gateway_id + suffix;
-          if (version == 5)
-            client->subscribe(filter, 1, ::mqtt::subscribe_options(true));  // no local: no echo of replies
-          else
-            client->subscribe(filter, 1);
-        }
+    forget_in_flight(true);
+    // The online status before the backlog, then the request subscriptions.
+    send_control(status_topic(), cfg.online_payload, true, nullptr);
+    if (cfg.accept_requests) {
+      const std::string base = "canopen/" + cfg.gateway_id;
+      const std::string filters[] = {base + "/+/+/sdo/read", base + "/+/+/sdo/write", base + "/+/+/nmt"};
+      // MQTT 5: no local, so the gateway's own replies are not echoed.
+      const codec::Subscription subs[] = {{filters[0], 1, true}, {filters[1], 1, true}, {filters[2], 1, true}};
+      if (const std::uint16_t pid = alloc_pid(); pid != 0) {
+        if (codec::encode_subscribe(conn->out(), version, pid, subs) == codec::Error::None)
+          pid_slot[pid] = kControlPid;
+        else
+          log.warn("mqtt: request topics cannot be subscribed (gateway id not UTF-8?)");
       }
-    } catch (const std::exception& e) {
-      log.warn(std::string("mqtt: after connect: ") + e.what());
     }
     queue.rewind();
-    in_flight.clear();
-    ++epoch;
     last_progress = std::chrono::steady_clock::now();
     if (log.enabled(LogLevel::Debug))
       log.debug("mqtt: sending from " + std::to_string(queue.head_seq()) + ", " + std::to_string(queue.depth()) +
                 " queued");
     drain();
+    if (conn) conn->flush();  // status and SUBSCRIBE when the queue is empty
+  }
+
+  // A QoS 1 PUBLISH outside the queue (status, replies). False when it
+  // could not be encoded.
+  bool send_control(std::string_view topic, std::string_view payload, bool retain,
+                    const codec::PublishProperties* props) {
+    if (!conn) return false;
+    const std::uint16_t pid = alloc_pid();
+    if (pid == 0) return false;
+    codec::Publish p;
+    p.topic = topic;
+    p.payload = payload;
+    p.qos = max_qos;
+    p.retain = retain && retain_available;
+    p.packet_id = p.qos > 0 ? pid : 0;
+    if (props && version == codec::kMqtt5) p.props = *props;
+    if (max_packet > 0 && codec::publish_size(version, p) > max_packet) return false;
+    if (codec::encode_publish(conn->out(), version, p) != codec::Error::None) return false;
+    if (p.qos > 0) pid_slot[pid] = kControlPid;
+    return true;
   }
 
   void on_lost(const std::string& why) {
+    drop_connection();
     if (!connected) return;
     connected = false;
-    ++epoch;
-    in_flight.clear();
+    forget_in_flight(true);
     queue.rewind();  // resend everything unacked, in order, after reconnect
     log.warn("mqtt: " + why + "; " + std::to_string(queue.depth()) + " messages queued");
     if (running) schedule_retry();
   }
 
-  void drain() {
-    // Whoever drains (pump, delivery batch, reconnect, retry): what is sent
-    // is written to the queue's files first.
-    if (connected && queue.flush_pending()) flush_queue();
-    DiskQueue::Item item;
-    const std::size_t limit = window();
-    while (connected && in_flight.size() < limit && queue.next(item)) {
-      auto msg = ::mqtt::make_message(item.msg.topic, item.msg.payload, item.msg.qos == 0 ? 0 : 1, item.msg.retained);
-      try {
-        client->publish(msg, to_context(item.seq << 16 | epoch), *delivery_listener);
-        in_flight[item.seq] = epoch;
-        ++counters.sent;
-      } catch (const ::mqtt::exception& e) {
-        const int rc = e.get_return_code();
-        if (rc == MQTTASYNC_DISCONNECTED) {
-          // The loss callback follows; it rewinds.
-          on_lost("publish while disconnected");
+  void on_packet(const codec::Packet& p) {
+    switch (p.type) {
+      case codec::PacketType::Puback: {
+        std::uint16_t pid;
+        std::uint8_t reason;
+        if (auto e = codec::parse_puback(p, version, pid, reason); e != codec::Error::None) {
+          on_lost(std::string("bad PUBACK: ") + codec::to_string(e));
           return;
         }
-        if (rc == MQTTASYNC_MAX_BUFFERED_MESSAGES || rc == MQTTASYNC_MAX_MESSAGES_INFLIGHT ||
-            rc == MQTTASYNC_NO_MORE_MSGIDS) {
-          // Paho is full for now: hand this one out again later.
-          queue.rewind_to(item.seq);
-          arm_drain_retry();
-          return;
-        }
-        if (rc == MQTTASYNC_BAD_UTF8_STRING || rc == MQTTASYNC_NULL_PARAMETER || rc == MQTTASYNC_TOPICNAME_TRUNCATED ||
-            rc == MQTTASYNC_BAD_STRUCTURE || rc == MQTTASYNC_BAD_QOS) {
-          // Paho refuses this very message (bad topic ...): drop it rather
-          // than block the queue forever.
-          ++counters.rejected;
-          queue.ack(item.seq);
-          log.warn("mqtt: dropping message to '" + item.msg.topic + "': " + e.what());
-          continue;
-        }
-        // Anything else is the connection's state (e.g. going down while the
-        // broker stops), not the message's: keep it and try again later, so
-        // nothing accepted is ever dropped for it.
-        queue.rewind_to(item.seq);
-        arm_drain_retry();
-        if (log.enabled(LogLevel::Debug)) log.debug(std::string("mqtt: publish refused for now: ") + e.what());
+        on_puback(pid, reason);
         return;
       }
+      case codec::PacketType::Publish: {
+        codec::Publish in;
+        if (auto e = codec::parse_publish(p, version, in); e != codec::Error::None) {
+          on_lost(std::string("bad PUBLISH from the broker: ") + codec::to_string(e));
+          return;
+        }
+        if (in.qos > 0) codec::encode_puback(conn->out(), version, in.packet_id);
+        on_request(in);
+        return;
+      }
+      case codec::PacketType::Suback: {
+        std::uint16_t pid;
+        suback_codes.clear();
+        if (auto e = codec::parse_suback(p, version, pid, suback_codes); e != codec::Error::None) {
+          on_lost(std::string("bad SUBACK: ") + codec::to_string(e));
+          return;
+        }
+        if (pid_slot[pid] == kControlPid) pid_slot[pid] = kFreePid;
+        for (auto c : suback_codes)
+          if (c >= 0x80) log.warn("mqtt: broker refused a request subscription, code " + std::to_string(c));
+        return;
+      }
+      case codec::PacketType::Disconnect: {
+        std::uint8_t reason = 0;
+        (void)codec::parse_disconnect(p, version, reason);
+        on_lost("broker disconnected, reason " + std::to_string(reason));
+        return;
+      }
+      default:
+        // PUBREC etc. cannot come (QoS <= 1 both ways): a broker bug.
+        on_lost("unexpected packet type " + std::to_string(static_cast<int>(p.type)));
+        return;
     }
   }
 
-  void arm_drain_retry() {
-    if (drain_retry_armed) return;
-    drain_retry_armed = true;
-    drain_timer.expires_after(std::chrono::milliseconds(10));
-    drain_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
-      auto self = weak.lock();
-      if (ec || !self) return;
-      self->drain_retry_armed = false;
-      self->drain();
-    });
+  void on_puback(std::uint16_t pid, std::uint8_t reason) {
+    const std::uint64_t slot = pid_slot[pid];
+    if (slot == kFreePid) return;  // forgotten by a stall restart
+    pid_slot[pid] = kFreePid;
+    if (slot == kControlPid) return;
+    --inflight_q1;
+    acks_in_batch = true;
+    if (reason >= 0x80) {
+      // MQTT 5 PUBACK refusal (not authorized, topic invalid ...): resending
+      // would only repeat it.
+      ++counters.rejected;
+      queue.ack(slot);
+      log.warn("mqtt: broker refused a message, reason " + std::to_string(reason));
+    } else if (queue.ack(slot)) {
+      ++counters.acked;
+    }
   }
 
-  // All delivery results that arrived since the last batch, then one drain
-  // for all of them (the ack position goes to disk on the sync tick).
-  void on_deliveries() {
-    delivered.clear();
-    {
-      std::lock_guard<std::mutex> lock(inbox->mutex);
-      delivered.swap(inbox->results);
-      inbox->posted = false;
+  // After all packets of one read: refill the window once (one write for
+  // the PUBACKs to requests and the next PUBLISHes).
+  void on_batch_end() {
+    if (acks_in_batch) {
+      acks_in_batch = false;
+      last_progress = std::chrono::steady_clock::now();
     }
-    for (const auto& r : delivered) on_delivery(r.context, r.ok, r.reason);
+    const std::uint64_t writes = conn ? conn->writes() : 0;
     drain();
+    if (!conn) return;
+    conn->flush();
+    // Nothing written back (the window is still more than half full): ACK
+    // at once, or a Nagle broker holds the PUBACKs we wait for.
+    if (conn && conn->writes() == writes && inflight_q1 > 0) conn->ack_now();
+  }
+
+  // Every QoS 0 message handed to the kernel has left the queue.
+  void on_drained() {
+    if (unwritten_q0.empty()) return;
+    for (auto seq : unwritten_q0)
+      if (queue.ack(seq)) ++counters.acked;
+    unwritten_q0.clear();
+    last_progress = std::chrono::steady_clock::now();
+    // A drain stopped by kMaxBuffered continues (not from inside drain()).
+    if (!draining && buffer_full) schedule_pump();
+  }
+
+  void drain() {
+    // Whoever drains (pump, PUBACK batch, reconnect, retry): what is sent
+    // is written to the queue's files first.
+    if (!connected || !conn) return;
+    if (queue.flush_pending()) flush_queue();
+    const std::size_t limit = window();
+    // Refill only once at most half the window is in flight: the window
+    // goes out in a few large writes instead of one write per PUBACK read
+    // (each read of the broker's PUBACKs otherwise frees a slot or two).
+    if (inflight_q1 > limit / 2) return;
+    draining = true;
+    buffer_full = false;
+    for (;;) {
+      bool any = false;
+      while (connected && inflight_q1 < limit && queue.next(item)) {
+        codec::Publish p;
+        p.topic = item.msg.topic;
+        p.payload = item.msg.payload;
+        p.qos = item.msg.qos == 0 ? 0 : max_qos;
+        p.retain = item.msg.retained && retain_available;
+        if (p.qos > 0) {
+          p.packet_id = alloc_pid();
+          if (p.packet_id == 0) {  // cannot happen with a window < 65535
+            queue.rewind_to(item.seq);
+            break;
+          }
+        }
+        codec::Error e = codec::Error::None;
+        if (max_packet > 0 && codec::publish_size(version, p) > max_packet)
+          e = codec::Error::PacketTooLarge;
+        else
+          e = codec::encode_publish(conn->out(), version, p);
+        if (e != codec::Error::None) {
+          // This very message cannot be sent (bad topic, too large): drop it
+          // rather than block the queue forever.
+          ++counters.rejected;
+          queue.ack(item.seq);
+          log.warn("mqtt: dropping message to '" + item.msg.topic + "': " + codec::to_string(e));
+          continue;
+        }
+        if (p.qos > 0) {
+          pid_slot[p.packet_id] = item.seq;
+          ++inflight_q1;
+        } else {
+          unwritten_q0.push_back(item.seq);
+        }
+        ++counters.sent;
+        any = true;
+        if (conn->pending() >= kMaxBuffered) {
+          buffer_full = true;
+          break;
+        }
+      }
+      if (!any || !conn) break;
+      conn->flush();  // one write for the batch; may ack QoS 0 at once
+      // Go on only if the buffer cap stopped us and the write took it all.
+      if (!conn || !buffer_full || conn->pending() > 0) break;
+      buffer_full = false;
+    }
+    draining = false;
   }
 
   // Once per io loop turn (posted by the first publish after the last
-  // one): write the records the queue buffered, then hand them to Paho. So
-  // a message is in the kernel before it is sent, and Paho gets the turn's
-  // messages in one burst (its send thread wakes once, not per message).
+  // one): write the records the queue buffered, then send them. So a
+  // message is in the kernel before it is sent, and the turn's messages go
+  // to the socket in one write.
   void schedule_pump() {
     if (pump_posted) return;
     pump_posted = true;
@@ -452,33 +587,10 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     }
   }
 
-  // One result; the caller (on_deliveries) drains after the batch.
-  void on_delivery(std::uint64_t context, bool ok, int reason) {
-    const std::uint64_t seq = context >> 16;
-    const auto sent_epoch = static_cast<std::uint16_t>(context & 0xffff);
-    if (auto it = in_flight.find(seq); it != in_flight.end() && it->second == sent_epoch) in_flight.erase(it);
-    else if (!ok) return;  // a failure from an earlier connection: already rewound
-    last_progress = std::chrono::steady_clock::now();
-    if (ok) {
-      // A late ack from an earlier connection is still a real ack.
-      if (queue.ack(seq)) ++counters.acked;
-    } else if (reason >= 0x80 && connected) {
-      // MQTT 5 PUBACK refusal (not authorized, topic invalid ...): resending
-      // would only repeat it.
-      ++counters.rejected;
-      queue.ack(seq);
-      log.warn("mqtt: broker refused a message, reason " + std::to_string(reason));
-    }
-    // Other failures come with a connection loss: resent after reconnect.
-    if (!ok && log.enabled(LogLevel::Debug))
-      log.debug("mqtt: delivery of " + std::to_string(seq) + " failed, reason " + std::to_string(reason) +
-                (connected ? " (connected)" : ""));
-  }
-
-  void publish(const QueuedMessage& m) {
+  void publish(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained) {
     ++counters.published;
     try {
-      queue.push(m);
+      queue.push(topic, payload, qos, retained);
     } catch (const std::exception& e) {
       ++counters.dropped;
       log.error(std::string("mqtt: queue write failed: ") + e.what());
@@ -507,33 +619,23 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     return !t.empty() && t.find_first_of("+#") == std::string_view::npos && t.size() < 65535;
   }
 
-  void on_request(const ::mqtt::message& msg) {
+  void on_request(const codec::Publish& msg) {
     if (!running) return;
     ++counters.requests;
-    const std::string& topic = msg.get_topic();
+    const std::string topic(msg.topic);
     ApiRequest req;
     ReplyAddress addr;
-    req.body = msg.get_payload_str();
-    const auto& props = msg.get_properties();
-    try {
-      if (props.contains(::mqtt::property::RESPONSE_TOPIC)) {
-        addr.topic = ::mqtt::get<std::string>(props, ::mqtt::property::RESPONSE_TOPIC);
-        addr.v5 = true;
-        if (props.contains(::mqtt::property::CORRELATION_DATA))
-          addr.correlation = ::mqtt::get<std::string>(props, ::mqtt::property::CORRELATION_DATA);
-      }
-      // MQTT 5 user property "authorization": "Bearer <token>" (or the token).
-      const auto n_user = props.count(::mqtt::property::USER_PROPERTY);
-      for (std::size_t i = 0; i < n_user; ++i) {
-        auto [name, value] = ::mqtt::get<::mqtt::string_pair>(props, ::mqtt::property::USER_PROPERTY, i);
-        if (name == "authorization") req.token = std::string(strip_bearer(value));
-      }
-      if (props.contains(::mqtt::property::CONTENT_TYPE) &&
-          ::mqtt::get<std::string>(props, ::mqtt::property::CONTENT_TYPE) == "application/x-protobuf")
-        req.protobuf = true;
-    } catch (const std::exception&) {
-      // Malformed properties: treated as absent.
+    req.body = std::string(msg.payload);
+    const auto& props = msg.props;
+    if (props.response_topic) {
+      addr.topic = std::string(*props.response_topic);
+      addr.v5 = true;
+      if (props.correlation_data) addr.correlation = std::string(*props.correlation_data);
     }
+    // MQTT 5 user property "authorization": "Bearer <token>" (or the token).
+    for (const auto& u : props.user)
+      if (u.name == "authorization") req.token = std::string(strip_bearer(u.value));
+    if (props.content_type && *props.content_type == "application/x-protobuf") req.protobuf = true;
     if (!req.protobuf) {
       // replyTo/correlationId in a JSON body (3.1.1; allowed over 5 too).
       boost::system::error_code ec;
@@ -615,7 +717,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
       log.info("mqtt: request on " + request_topic + " without reply address: status " + std::to_string(r.status));
       return;
     }
-    if (!connected || !client) {
+    if (!connected || !conn) {
       ++counters.replies_dropped;
       log.warn("mqtt: reply to " + addr.topic + " dropped: not connected");
       return;
@@ -629,20 +731,17 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
         body = json::serialize(v);
       }
     }
-    auto msg = ::mqtt::make_message(addr.topic, body, 1, false);
-    if (version == 5) {
-      ::mqtt::properties p;
-      if (!addr.correlation.empty()) p.add(::mqtt::property(::mqtt::property::CORRELATION_DATA, addr.correlation));
-      p.add(::mqtt::property(::mqtt::property::USER_PROPERTY, "status", std::to_string(r.status)));
-      p.add(::mqtt::property(::mqtt::property::CONTENT_TYPE, r.content_type));
-      msg->set_properties(p);
-    }
-    try {
-      client->publish(msg);
+    const std::string status = std::to_string(r.status);
+    codec::PublishProperties props;
+    if (!addr.correlation.empty()) props.correlation_data = addr.correlation;
+    props.user.push_back({"status", status});
+    if (!r.content_type.empty()) props.content_type = r.content_type;
+    if (send_control(addr.topic, body, false, &props)) {
       ++counters.replies;
-    } catch (const std::exception& e) {
+      conn->flush();  // a reply from a handler completing later has no batch to join
+    } else {
       ++counters.replies_dropped;
-      log.warn("mqtt: reply to " + addr.topic + " failed: " + e.what());
+      log.warn("mqtt: reply to " + addr.topic + " failed: cannot be encoded");
     }
   }
 
@@ -651,19 +750,29 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     running = false;
     sync_timer.cancel();
     retry_timer.cancel();
-    drain_timer.cancel();
-    if (client && connected) {
-      try {
-        auto half = timeout / 2;
-        auto tok = client->publish(::mqtt::make_message(status_topic(), cfg.offline_payload, 1, true));
-        tok->wait_for(half);
-        client->disconnect(static_cast<int>(half.count()))->wait_for(half);
-      } catch (const std::exception& e) {
-        log.warn(std::string("mqtt: disconnect: ") + e.what());
-      }
+    if (conn && connected) {
+      // The offline status (retained) and DISCONNECT, then wait for the
+      // broker to close: it handles them in order, so the Will is not sent.
+      scratch.clear();
+      const std::string topic = status_topic();
+      codec::Publish p;
+      p.topic = topic;
+      p.payload = cfg.offline_payload;
+      p.qos = max_qos;
+      p.retain = retain_available;
+      const std::uint16_t pid = alloc_pid();
+      p.packet_id = p.qos > 0 ? (pid == 0 ? 1 : pid) : 0;
+      codec::encode_publish(scratch, version, p);
+      codec::encode_disconnect(scratch, version);
+      socket_writes_before += conn->writes();
+      if (!conn->finish(scratch, timeout)) log.warn("mqtt: disconnect did not complete; the broker sends the Will");
+      conn.reset();
+    } else {
+      drop_connection();
     }
     connected = false;
     connecting = false;
+    forget_in_flight(true);
     flush_queue(true);
     queue.sync();
   }
@@ -674,65 +783,13 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     c.dropped += q.dropped() + c.rejected;
     c.queue_depth = queue.depth();
     c.queue_bytes = q.bytes;
-    c.in_flight = in_flight.size();
+    c.in_flight = in_flight();
     c.connected = connected;
     c.mqtt_version = connected ? version : 0;
+    c.socket_writes = socket_writes_before + (conn ? conn->writes() : 0);
     return c;
   }
 };
-
-void PahoListener::on_success(const ::mqtt::token& tok) {
-  const std::uint64_t id = from_context(tok.get_user_context());
-  if (kind_ == Kind::Connect) {
-    // MQTT 5: the broker's Receive Maximum (CONNACK; mosquitto's
-    // max_inflight_messages, 20 by default) caps the QoS 1 messages in
-    // flight. Paho holds back more than that, so the window must not exceed
-    // it (or sending stalls).
-    std::size_t receive_max = 0;
-    try {
-      const auto props = tok.get_connect_response().get_properties();
-      if (props.contains(::mqtt::property::RECEIVE_MAXIMUM))
-        receive_max = static_cast<std::size_t>(::mqtt::get<int>(props, ::mqtt::property::RECEIVE_MAXIMUM));
-    } catch (const std::exception&) {
-      // No connect response (3.1.1) or no such property: no cap.
-    }
-    asio::post(io_, [w = impl_, id, receive_max] {
-      if (auto self = w.lock()) {
-        self->receive_max = receive_max;
-        self->on_connect_result(id, true, 0, 0);
-      }
-    });
-  } else {
-    deliver(id, true, 0);
-  }
-}
-
-void PahoListener::deliver(std::uint64_t context, bool ok, int reason) {
-  bool post = false;
-  {
-    std::lock_guard<std::mutex> lock(inbox_->mutex);
-    inbox_->results.push_back({context, ok, reason});
-    if (!inbox_->posted) post = inbox_->posted = true;
-  }
-  if (post) {
-    asio::post(io_, [w = impl_] {
-      if (auto self = w.lock()) self->on_deliveries();
-    });
-  }
-}
-
-void PahoListener::on_failure(const ::mqtt::token& tok) {
-  const std::uint64_t id = from_context(tok.get_user_context());
-  const int rc = tok.get_return_code();
-  const int reason = static_cast<int>(tok.get_reason_code());
-  if (kind_ == Kind::Connect) {
-    asio::post(io_, [w = impl_, id, rc, reason] {
-      if (auto self = w.lock()) self->on_connect_result(id, false, rc, reason);
-    });
-  } else {
-    deliver(id, false, reason);
-  }
-}
 
 MqttPublisher::MqttPublisher(asio::io_context& io, MqttConfig cfg, Logger& log, RequestHandler handler)
     : impl_(std::make_shared<Impl>(io, std::move(cfg), log, std::move(handler))) {}
@@ -747,15 +804,11 @@ void MqttPublisher::publish(const EncodedEventPtr& ev) { publish(ev, impl_->cfg.
 void MqttPublisher::publish(const EncodedEventPtr& ev, PayloadFormat format) {
   if (!ev) return;
   const auto k = static_cast<std::size_t>(ev->kind);
-  QueuedMessage m;
-  m.topic = ev->topic;
-  m.payload = format == PayloadFormat::Json ? ev->json : ev->binary;
-  m.qos = k < kEventKindCount ? impl_->cfg.qos[k] : 1;
-  m.retained = ev->retained;
-  impl_->publish(m);
+  impl_->publish(ev->topic, format == PayloadFormat::Json ? ev->json : ev->binary,
+                 k < kEventKindCount ? impl_->cfg.qos[k] : 1, ev->retained);
 }
 
-void MqttPublisher::publish(const QueuedMessage& m) { impl_->publish(m); }
+void MqttPublisher::publish(const QueuedMessage& m) { impl_->publish(m.topic, m.payload, m.qos, m.retained); }
 
 MqttPublisher::Counters MqttPublisher::counters() const { return impl_->snapshot(); }
 const DiskQueue::Counters& MqttPublisher::queue_counters() const { return impl_->queue.counters(); }

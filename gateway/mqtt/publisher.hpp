@@ -3,7 +3,13 @@
 //
 // Delivery: publish() appends to the DiskQueue (in memory) and returns; a
 // handler it posts (once per io loop turn) writes the turn's messages to
-// the queue's files with one write() and then hands them to Paho. So a
+// the queue's files with one write() and then encodes them and writes
+// them to the socket, all that the window allows in ONE write (the
+// publisher's own MQTT client, mqtt_codec.hpp and mqtt_connection.hpp, on
+// the caller's io_context; no threads). A read of the socket handles all
+// PUBACKs that arrived; the window is refilled, with one write, once at
+// most half of it is in flight (so a window goes out in a few large writes,
+// not one write per PUBACK read). So a
 // message given to publish() is in the kernel (survives kill -9 of the
 // gateway) once the io thread has finished the handlers ready in the same
 // turn, and before it is sent; a kill -9 loses at most the messages
@@ -15,21 +21,27 @@
 // an in-flight window (Config::inflight_window, capped by the broker's MQTT 5
 // Receive Maximum less 4 for status and replies) drains the queue in order,
 // and a message leaves the queue when the broker acknowledges it (PUBACK for
-// QoS 1, written to the socket for QoS 0). On a connection loss everything
+// QoS 1, handed to the kernel's socket buffer for QoS 0). On a connection loss everything
 // unacknowledged is sent again, oldest first, after the reconnect; so order
 // holds across outages and a QoS 1 message is delivered at least once
 // (a duplicate only when a PUBACK was lost with the connection). The
-// session is clean (clean start / clean session): the queue, not the
-// broker or Paho, holds the backlog. Paho's own persistence is off. As a
+// session is clean (clean start / clean session, MQTT 5 Session Expiry 0):
+// the queue, not the broker, holds the backlog. As a
 // safety net, if no PUBACK comes for 30 s while messages are in flight (or
 // messages are pending with none in flight) on a live connection, sending
 // restarts from the oldest unacked message (duplicates possible, no loss).
-// A message the broker refuses (MQTT 5 PUBACK reason >= 0x80) or Paho
-// refuses (bad topic) is dropped and counted in `rejected`, so one bad
-// message cannot block the queue.
+// A message the broker refuses (MQTT 5 PUBACK reason >= 0x80) or that
+// cannot be encoded (empty topic, wildcards, not UTF-8, over the broker's
+// Maximum Packet Size) is dropped and counted in `rejected`, so one bad
+// message cannot block the queue. Under MQTT 5 the broker's Maximum QoS 0
+// sends QoS 1 messages as QoS 0, and Retain Available 0 clears the retain
+// flag.
 //
 // Connection: the gateway's own reconnect loop with exponential backoff
-// (reconnect_min doubling to reconnect_max). Will: `<status topic>` retained
+// (reconnect_min doubling to reconnect_max); connect_timeout covers TCP
+// connect, TLS handshake and CONNACK. keepalive: a PINGREQ when the link is
+// quiet, and a connection that sends nothing for 1.5 keepalives is taken
+// as lost (the broker's Server Keep Alive wins if it sends one). Will: `<status topic>` retained
 // offline_payload; after every connect online_payload is published retained
 // before the backlog. With mqtt_version 5, a broker refusing MQTT 5 (CONNACK
 // "unsupported protocol version", 0x84, or the 3.1.1 code 1) makes the
@@ -48,10 +60,14 @@
 // A body with MQTT 5 content type "application/x-protobuf" is protobuf.
 //
 // Thread safety: every member function must be called on the thread that
-// runs `io` (the io thread). Paho's callbacks only post to `io`; all state
-// lives on the io thread. The io_context, logger and handler must outlive
-// the publisher. stop() (or the destructor) blocks the io thread for up to
-// its timeout while the offline status and DISCONNECT go out.
+// runs `io` (the io thread); all state lives there and the publisher starts
+// no threads (a host name that is not a numeric address is resolved by
+// asio's resolver, which uses its own internal thread). The io_context,
+// logger and handler must outlive the publisher. stop() (or the
+// destructor) blocks the io thread for up to its timeout while the offline
+// status and DISCONNECT go out and the broker closes the connection; if
+// that cannot be done (TLS write in progress, timeout) the socket is just
+// closed and the broker publishes the Will (the same offline status).
 #pragma once
 
 #include <array>
@@ -102,8 +118,8 @@ struct MqttConfig {
   // fdatasync of the queue, on the io thread (it blocks for the sync: on a
   // slow disk choose a longer interval; 0 = never, page cache only).
   std::chrono::milliseconds sync_interval{100};
-  // QoS 1 messages in flight; Paho's max inflight is set to match. Under
-  // MQTT 5 the broker's Receive Maximum caps it (mosquitto: 20 by default).
+  // QoS 1 messages in flight. Under MQTT 5 the broker's Receive Maximum
+  // less 4 caps it (mosquitto: 20 by default, so 16).
   std::size_t inflight_window = 256;
   bool accept_requests = true;
 };
@@ -112,10 +128,10 @@ class MqttPublisher {
  public:
   struct Counters {
     std::uint64_t published = 0;        // accepted by publish()
-    std::uint64_t sent = 0;             // handed to Paho (resends included)
+    std::uint64_t sent = 0;             // encoded for the socket (resends included)
     std::uint64_t acked = 0;            // confirmed by the broker
     std::uint64_t dropped = 0;          // queue drops (policy) + rejected + write errors
-    std::uint64_t rejected = 0;         // refused by broker or Paho (bad topic, PUBACK >= 0x80)
+    std::uint64_t rejected = 0;         // refused by the broker (PUBACK >= 0x80) or not encodable
     std::uint64_t queue_depth = 0;
     std::uint64_t queue_bytes = 0;
     std::uint64_t in_flight = 0;
@@ -125,6 +141,7 @@ class MqttPublisher {
     std::uint64_t bad_requests = 0;     // bad topic or reply address
     std::uint64_t replies = 0;
     std::uint64_t replies_dropped = 0;  // not connected when the reply was ready
+    std::uint64_t socket_writes = 0;    // send()/write calls on the sockets (batching)
     bool connected = false;
     int mqtt_version = 0;               // of the current connection: 5 or 4
   };

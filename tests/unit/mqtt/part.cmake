@@ -1,6 +1,9 @@
 # MQTT: DiskQueue unit tests and publisher tests against a real mosquitto
-# started by the fixture (skipped when /usr/sbin/mosquitto is missing).
-canopen_unit_test(mqtt_tests SOURCES ${U}/mqtt/*_test.cpp LIBS gateway_mqtt)
+# started by the fixture (skipped when /usr/sbin/mosquitto is missing), and
+# the MQTT codec's unit tests. Paho is the independent reference client of
+# the tests (subscribers, requesters); the gateway does not use it.
+find_package(PahoMqttCpp REQUIRED)
+canopen_unit_test(mqtt_tests SOURCES ${U}/mqtt/*_test.cpp LIBS gateway_mqtt PahoMqttCpp::paho-mqttpp3)
 if(TARGET mqtt_tests)
   add_executable(mqtt_publish_tool ${U}/mqtt/mqtt_publish_tool.cpp)
   target_link_libraries(mqtt_publish_tool PRIVATE gateway_mqtt canopen_options)

@@ -460,3 +460,215 @@ TEST_F(MqttPublisherTest, FallsBackTo311WhenBrokerRefuses5) {
   EXPECT_EQ(r.at("correlationId").as_int64(), 3);
   io_.call([&] { pub_.reset(); });  // before the proxy goes
 }
+
+// Batching: every PUBLISH ready in one io loop turn goes to the socket in
+// one write (QoS 0: the messages leave the queue once written).
+TEST_F(MqttPublisherTest, OneWriteCarriesEveryPublishOfALoopTurn) {
+  start_broker();
+  Subscriber live(broker_->uri(), "batch", {"canopen/gw1/1/5/tpdo/1"}, {});
+  ASSERT_TRUE(live.connect());
+  auto c = config();
+  c.qos.fill(0);
+  start_publisher(c);
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0 && counters().in_flight == 0; }));
+  const auto before = counters();
+  constexpr int kN = 500;
+  io_.call([&] {
+    for (int i = 0; i < kN; ++i)
+      pub_->publish(make_event(EventKind::Tpdo, "canopen/gw1/1/5/tpdo/1", std::to_string(i), false));
+  });
+  ASSERT_TRUE(live.wait_count(kN, 10s)) << "got " << live.messages().size();
+  EXPECT_EQ(payloads(live.messages()), numbers(0, kN));
+  const auto after = counters();
+  EXPECT_EQ(after.acked - before.acked, static_cast<std::uint64_t>(kN));
+  EXPECT_EQ(after.queue_depth, 0u);
+  // One write; a keepalive PINGREQ could add one.
+  EXPECT_LE(after.socket_writes - before.socket_writes, 2u);
+}
+
+// QoS 1: the window (mosquitto's Receive Maximum 20, less 4: 16) is
+// refilled once at most half of it is in flight, so each write carries at
+// least 8 messages while the queue has them, and never more than 16.
+TEST_F(MqttPublisherTest, Qos1RefillsTheWindowOncePerBatchOfAcks) {
+  start_broker();
+  Subscriber live(broker_->uri(), "batch1", {"canopen/gw1/1/5/emcy"}, {});
+  ASSERT_TRUE(live.connect());
+  start_publisher(config());
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0 && counters().in_flight == 0; }));
+  const auto before = counters();
+  constexpr int kN = 2000;
+  io_.call([&] {
+    for (int i = 0; i < kN; ++i)
+      pub_->publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", std::to_string(i), false));
+  });
+  ASSERT_TRUE(live.wait_count(kN, 20s)) << "got " << live.messages().size();
+  EXPECT_EQ(payloads(live.messages()), numbers(0, kN));
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0; }));
+  const auto after = counters();
+  EXPECT_EQ(after.acked - before.acked, static_cast<std::uint64_t>(kN));
+  EXPECT_LE(after.in_flight, 0u);
+  const auto writes = after.socket_writes - before.socket_writes;
+  EXPECT_GE(writes, static_cast<std::uint64_t>(kN / 16));  // never more than the window per write
+  EXPECT_LE(writes, static_cast<std::uint64_t>(kN / 8 + 8));
+  std::printf("QoS 1: %d messages in %llu writes\n", kN, static_cast<unsigned long long>(writes));
+}
+
+// Keepalive: an idle connection stays up (PINGREQs), and a broker that
+// stops answering is noticed within 1.5 keepalives and reconnected.
+TEST_F(MqttPublisherTest, KeepalivePingsAndNoticesASilentBroker) {
+  start_broker();
+  auto c = config();
+  c.keepalive = 1s;
+  start_publisher(c);
+  const auto w0 = counters().socket_writes;
+  std::this_thread::sleep_for(3500ms);  // mosquitto drops a client silent for 1.5 s
+  auto k = counters();
+  EXPECT_TRUE(k.connected);
+  EXPECT_EQ(k.reconnects, 0u);
+  EXPECT_GE(k.socket_writes - w0, 3u);  // PINGREQs
+  io_.call([&] { pub_.reset(); });
+
+  // A fake broker: CONNACK, then silence (reads everything, answers nothing).
+  int lfd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(lfd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(lfd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::listen(lfd, 8);
+  std::atomic<int> accepted{0};
+  std::atomic<bool> stop{false};
+  std::thread fake([&] {
+    std::vector<int> conns;
+    while (!stop) {
+      pollfd p{lfd, POLLIN, 0};
+      if (::poll(&p, 1, 50) > 0) {
+        int cfd = ::accept(lfd, nullptr, nullptr);
+        if (cfd >= 0) {
+          ++accepted;
+          conns.push_back(cfd);
+          char buf[512];
+          (void)!::read(cfd, buf, sizeof buf);  // CONNECT
+          const char connack[] = {0x20, 0x03, 0x00, 0x00, 0x00};
+          (void)!::write(cfd, connack, sizeof connack);
+        }
+      }
+      for (int cfd : conns) {
+        char buf[512];
+        pollfd q{cfd, POLLIN, 0};
+        if (::poll(&q, 1, 0) > 0) (void)!::read(cfd, buf, sizeof buf);
+      }
+    }
+    for (int cfd : conns) ::close(cfd);
+  });
+  c.server_uri = "tcp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  start_publisher(c);
+  EXPECT_TRUE(eventually([&] { return accepted >= 2; }, 6s)) << "no reconnect after the broker went silent";
+  EXPECT_GE(counters().connects, 1u);
+  io_.call([&] { pub_.reset(); });
+  stop = true;
+  fake.join();
+  ::close(lfd);
+}
+
+// TLS (mqtts://): a CA-signed server certificate for 127.0.0.1 is
+// verified (name included); with another CA the connection is refused.
+TEST_F(MqttPublisherTest, TlsWithServerVerification) {
+  if (std::system("command -v openssl >/dev/null 2>&1") != 0) GTEST_SKIP() << "no openssl";
+  const auto d = queue_dir_.path() / "tls";
+  fs::create_directories(d);
+  const std::string D = d.string();
+  const std::string gen =
+      "cd " + D + " && exec >openssl.log 2>&1 && "
+      "openssl req -x509 -newkey rsa:2048 -nodes -keyout ca.key -out ca.pem -days 2 -subj /CN=test-ca && "
+      "openssl req -newkey rsa:2048 -nodes -keyout server.key -out server.csr -subj /CN=127.0.0.1 && "
+      "printf 'subjectAltName=IP:127.0.0.1\\n' > san.ext && "
+      "openssl x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -out server.pem -days 2 "
+      "-extfile san.ext && "
+      "openssl req -x509 -newkey rsa:2048 -nodes -keyout other.key -out other.pem -days 2 -subj /CN=other-ca && "
+      "chmod 644 *.key";
+  ASSERT_EQ(std::system(gen.c_str()), 0) << "openssl failed, see " << D << "/openssl.log";
+  broker_.emplace(false);
+  const int tls_port = free_port();
+  broker_->extra_conf = "listener " + std::to_string(tls_port) + " 127.0.0.1\ncafile " + D + "/ca.pem\ncertfile " +
+                          D + "/server.pem\nkeyfile " + D + "/server.key\n";
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+  ASSERT_TRUE(eventually([&] { return port_open(tls_port); }, 5s));
+  Subscriber live(broker_->uri(), "tls-sub", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(live.connect());
+
+  auto c = config();
+  c.server_uri = "mqtts://127.0.0.1:" + std::to_string(tls_port);
+  c.ca_file = D + "/ca.pem";
+  start_publisher(c);
+  EXPECT_EQ(counters().mqtt_version, 5);
+  for (int i = 0; i < 50; ++i) publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", std::to_string(i), false));
+  ASSERT_TRUE(eventually([&] { return live.on_topic("canopen/gw1/1/5/emcy").size() == 50; }, 10s));
+  EXPECT_EQ(payloads(live.on_topic("canopen/gw1/1/5/emcy")), numbers(0, 50));
+  io_.call([&] { pub_->stop(); });
+  ASSERT_TRUE(eventually([&] {
+    auto st = live.on_topic("canopen/gw1/status");
+    return !st.empty() && st.back()->get_payload_str() == R"({"state":"offline"})";
+  }, 5s));
+  io_.call([&] { pub_.reset(); });
+
+  // The wrong CA: never connects.
+  c.ca_file = D + "/other.pem";
+  c.queue.dir = queue_dir_.path() / "q2";
+  io_.call([&] {
+    pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_);
+    pub_->start();
+  });
+  std::this_thread::sleep_for(1500ms);
+  EXPECT_FALSE(counters().connected);
+  EXPECT_EQ(counters().connects, 0u);
+}
+
+// connect_timeout covers the CONNACK: a server that accepts TCP but never
+// answers is given up on and tried again with backoff.
+TEST_F(MqttPublisherTest, ConnectTimeoutWithoutConnack) {
+  int lfd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ASSERT_EQ(::bind(lfd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
+  socklen_t len = sizeof a;
+  ::getsockname(lfd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::listen(lfd, 8);
+  std::atomic<int> accepted{0};
+  std::atomic<bool> stop{false};
+  std::thread mute([&] {
+    std::vector<int> conns;
+    while (!stop) {
+      pollfd p{lfd, POLLIN, 0};
+      if (::poll(&p, 1, 50) > 0) {
+        int cfd = ::accept(lfd, nullptr, nullptr);
+        if (cfd >= 0) {
+          ++accepted;
+          conns.push_back(cfd);
+        }
+      }
+    }
+    for (int cfd : conns) ::close(cfd);
+  });
+  MqttConfig c;
+  c.server_uri = "tcp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  c.client_id = "timeout-test";
+  c.gateway_id = kGw;
+  c.queue.dir = queue_dir_.path() / "q";
+  c.connect_timeout = 1s;
+  c.reconnect_min = 100ms;
+  c.reconnect_max = 200ms;
+  io_.call([&] {
+    pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_);
+    pub_->start();
+  });
+  EXPECT_TRUE(eventually([&] { return accepted >= 2; }, 5s)) << "no second attempt after the timeout";
+  EXPECT_FALSE(counters().connected);
+  EXPECT_EQ(counters().connects, 0u);
+  io_.call([&] { pub_.reset(); });
+  stop = true;
+  mute.join();
+  ::close(lfd);
+}

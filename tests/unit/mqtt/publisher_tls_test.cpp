@@ -1,6 +1,7 @@
-// MqttPublisher over TLS with a user name and password (issue 6: "TLS and
-// credentials for MQTT"), against a real mosquitto with a TLS listener and
-// a password file; the certificate is made for the test with openssl.
+// MqttPublisher with a user name and password over TLS (issue 6: "TLS and
+// credentials for MQTT"), against a real mosquitto whose only listener is
+// TLS with a password file; the certificate is made for the test with
+// openssl. (Server verification against the wrong CA: publisher_test.cpp.)
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -22,8 +23,6 @@ class MqttTlsTest : public ::testing::Test {
     const std::string mk = "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 1 "
                            "-subj /CN=127.0.0.1 -addext subjectAltName=IP:127.0.0.1 -keyout " + d +
                            "/key.pem -out " + d + "/cert.pem > /dev/null 2>&1 && "
-                           "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 1 "
-                           "-subj /CN=other -keyout " + d + "/other-key.pem -out " + d + "/other.pem > /dev/null 2>&1 && "
                            "chmod 644 " + d + "/key.pem && "
                            "mosquitto_passwd -b -c " + d + "/passwd gateway s3cret > /dev/null 2>&1";
     ASSERT_EQ(std::system(mk.c_str()), 0) << mk;
@@ -76,19 +75,10 @@ TEST_F(MqttTlsTest, ConnectsOverTlsWithPasswordAndDelivers) {
   EXPECT_TRUE(eventually([&] { return counters().acked >= 1; })) << broker_.log();
 }
 
-TEST_F(MqttTlsTest, WrongPasswordOrUntrustedCertificateNeverConnects) {
+TEST_F(MqttTlsTest, WrongPasswordNeverConnects) {
   auto bad_password = config();
   bad_password.password = "wrong";
   start(bad_password);
-  std::this_thread::sleep_for(1500ms);
-  EXPECT_FALSE(counters().connected);
-  EXPECT_EQ(counters().connects, 0u);
-  io_.call([&] { pub_.reset(); });
-
-  auto untrusted = config();
-  untrusted.ca_file = (dir_.path() / "other.pem").string();  // not the broker's certificate
-  untrusted.queue.dir = dir_.path() / "q2";
-  start(untrusted);
   std::this_thread::sleep_for(1500ms);
   EXPECT_FALSE(counters().connected);
   EXPECT_EQ(counters().connects, 0u);
