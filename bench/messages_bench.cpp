@@ -38,6 +38,20 @@ void BM_EncodeTpdo2Values(benchmark::State& state) {
 }
 BENCHMARK(BM_EncodeTpdo2Values);
 
+// The same, JSON only (what the gateway does while nobody wants protobuf).
+void BM_EncodeTpdo2ValuesJsonOnly(benchmark::State& state) {
+  gateway::EncodeContext ctx{"gw1"};
+  ctx.protobuf = false;
+  canopen::Event ev = two_value_tpdo();
+  for (auto _ : state) {
+    ++ev.seq;
+    auto e = gateway::encode_event(ev, 1, ctx);
+    benchmark::DoNotOptimize(e);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_EncodeTpdo2ValuesJsonOnly);
+
 // For comparison: protobuf's own JSON printer on the same message (what
 // the direct writer avoids).
 void BM_ProtobufJsonPrinterTpdo2Values(benchmark::State& state) {

@@ -13,6 +13,7 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -65,7 +66,10 @@ int main(int argc, char** argv) {
 
   gateway::StateCache cache;
   cache.add_network(1, "bench", false);
-  const gateway::EncodeContext ctx{"bench"};
+  // As the gateway encodes with MQTT in JSON and no WebSocket client asking
+  // for protobuf: JSON only (CANOPEN_BENCH_PROTOBUF=1: protobuf as well).
+  gateway::EncodeContext ctx{"bench"};
+  ctx.protobuf = std::getenv("CANOPEN_BENCH_PROTOBUF") != nullptr;
   gateway::EventPipeline pipeline(
       [&ctx](std::uint32_t net, const canopen::Event& ev) { return gateway::encode_event(ev, net, ctx); }, cache);
   pipeline.add_consumer([&publisher](const gateway::EncodedEventPtr& ev) { publisher.publish(ev); });

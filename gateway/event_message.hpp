@@ -40,7 +40,8 @@ struct EncodedEvent {
   std::string topic;          // full MQTT topic, e.g. "canopen/gw1/1/5/tpdo/1"
   bool retained = false;
   std::string json;    // proto3 canonical JSON of the message
-  std::string binary;  // protobuf wire encoding of the same message
+  std::string binary;  // protobuf wire encoding of the same message; empty for a
+                       // PDO encoded without protobuf (EncodeContext::protobuf)
   // The WebSocket frames: EventEnvelope {kind, topic, <kind>: message}, so a
   // client knows what each message is without parsing the topic.
   std::string ws_json;

@@ -75,6 +75,7 @@ int run(const gateway::CliOptions& opts) {
   try {
     http = std::make_unique<gateway::http::HttpServer>(io, http_cfg, &log);
     app->add_consumer([srv = http.get()](const gateway::EncodedEventPtr& ev) { srv->publish(ev); });
+    app->set_protobuf_demand([srv = http.get()] { return srv->binary_clients() > 0; });
     gateway::auth::HttpAuthSettings auth;
     auth.enabled = config.http.auth;
     auth.anonymous = config.http.anonymous_role();

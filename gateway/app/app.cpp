@@ -98,9 +98,12 @@ App::App(boost::asio::io_context& io, Config config, Logger& log)
         for (const auto& c : config_.http.tokens) t.push_back({c.name, c.role, c.sha256});
         return auth::TokenStore(std::move(t));
       }()),
+      encode_ctx_{config_.gateway_id},
       pipeline_(
-          [ctx = EncodeContext{config_.gateway_id}](std::uint32_t network, const canopen::Event& ev) {
-            return encode_event(ev, network, ctx);
+          [this](std::uint32_t network, const canopen::Event& ev) {
+            encode_ctx_.protobuf = (config_.mqtt.enabled && config_.mqtt.format == PayloadFormat::Protobuf) ||
+                                   (protobuf_demand_ && protobuf_demand_());
+            return encode_event(ev, network, encode_ctx_);
           },
           cache_) {
   for (std::size_t i = 0; i < config_.networks.size(); ++i)

@@ -29,6 +29,7 @@
 #include "canopen/sdo/client.hpp"
 #include "config.hpp"
 #include "request_codec.hpp"
+#include "event_encoder.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
 #include "pipeline.hpp"
@@ -71,6 +72,10 @@ class App {
 
   // Extra consumer of every outgoing event (e.g. the WebSocket hub).
   void add_consumer(EventPipeline::Consumer c) { pipeline_.add_consumer(std::move(c)); }
+  // Whether an extra consumer wants protobuf payloads now (e.g. a WebSocket
+  // client that asked for them); asked for every event, so it must be cheap.
+  // Without it (and with MQTT in JSON) PDO events are encoded as JSON only.
+  void set_protobuf_demand(std::function<bool()> demand) { protobuf_demand_ = std::move(demand); }
 
   const Config& config() const { return config_; }
   // Writes one audit line ("audit: <line>", UTC time stamped, flushed at
@@ -159,6 +164,8 @@ class App {
   Config config_;
   Logger& log_;
   auth::TokenStore tokens_;
+  EncodeContext encode_ctx_;
+  std::function<bool()> protobuf_demand_;
   StateCache cache_;
   EventPipeline pipeline_;
   std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks

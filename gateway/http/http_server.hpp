@@ -138,6 +138,8 @@ class HttpServer {
   void publish(const EncodedEventPtr& event);
 
   HttpStats stats() const;
+  // WebSocket clients now connected that asked for protobuf (any thread).
+  std::size_t binary_clients() const;
 
   struct Impl;
 

@@ -48,6 +48,7 @@ constexpr auto kCloseGrace = std::chrono::seconds(2);
 
 struct Counters {
   std::atomic<std::uint64_t> accepted{0}, rejected{0}, active{0}, tls_failures{0};
+  std::atomic<std::uint64_t> ws_binary_clients{0};
   std::atomic<std::uint64_t> ws_clients{0}, ws_total{0}, ws_sent{0}, ws_dropped{0}, ws_closed_slow{0};
   std::array<std::atomic<std::uint64_t>, 600> by_status{};
   void count_status(int status) {
@@ -124,11 +125,15 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
     impl_->connections.erase(id_);
     impl_->ws_clients.erase(id_);
     if (registered_) impl_->counters.ws_clients.fetch_sub(1, std::memory_order_relaxed);
+    if (registered_ && binary_) impl_->counters.ws_binary_clients.fetch_sub(1, std::memory_order_relaxed);
     impl_->counters.active.fetch_sub(1, std::memory_order_relaxed);
   }
 
   void deliver(const EncodedEventPtr& ev) {
     if (!open_ || closing_ || !filter_.matches(*ev)) return;
+    // Encoded without protobuf (nobody wanted it when it was encoded, e.g.
+    // just before this client connected): nothing to send it.
+    if (binary_ && ev->binary.empty() && ev->ws_binary.empty()) return;
     push(SendQueue::Item{ev, {}, binary_});
   }
 
@@ -142,6 +147,7 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
     impl_->connections.emplace(id_, weak_from_this());
     impl_->ws_clients.emplace(id_, weak_from_this());
     impl_->counters.ws_clients.fetch_add(1, std::memory_order_relaxed);
+    if (binary_) impl_->counters.ws_binary_clients.fetch_add(1, std::memory_order_relaxed);
     impl_->counters.ws_total.fetch_add(1, std::memory_order_relaxed);
     impl_->counters.count_status(101);
     impl_->debug("ws client " + peer_ + " connected" + (binary_ ? " (protobuf)" : ""));
@@ -811,6 +817,10 @@ HttpServer::~HttpServer() {
 void HttpServer::add_route(std::string method, std::string_view pattern, Handler handler) {
   if (pattern == kEventsPath) throw std::invalid_argument("route " + std::string(pattern) + " is the event stream's");
   impl_->router.add(std::move(method), pattern, std::move(handler));
+}
+
+std::size_t HttpServer::binary_clients() const {
+  return static_cast<std::size_t>(impl_->counters.ws_binary_clients.load(std::memory_order_relaxed));
 }
 
 std::vector<std::pair<std::string, std::string>> HttpServer::routes() const { return impl_->router.list(); }

@@ -143,16 +143,20 @@ class Encoder {
     auto e = make(EventKind::Tpdo, h_, node_topic(ctx_, h_.network, p.node, "tpdo/" + std::to_string(p.number)),
                   false);
     // Sub-messages and strings on an arena whose first block is on the
-    // stack: no heap allocation for a typical PDO.
+    // stack: no heap allocation for a typical PDO. No message at all when
+    // nobody wants protobuf (most of the encoding's cost).
     alignas(std::max_align_t) std::array<char, 2048> block;
     google::protobuf::ArenaOptions opts;
     opts.initial_block = block.data();
     opts.initial_block_size = block.size();
     google::protobuf::Arena arena(opts);
-    pb::PdoEvent& m = *google::protobuf::Arena::CreateMessage<pb::PdoEvent>(&arena);
-    h_.set(m);
-    m.set_tpdo(p.number);
-    m.set_cob_id(p.cob_id);
+    pb::PdoEvent* m = ctx_.protobuf ? google::protobuf::Arena::CreateMessage<pb::PdoEvent>(&arena) : nullptr;
+    if (m != nullptr) {
+      h_.set(*m);
+      m->set_tpdo(p.number);
+      m->set_cob_id(p.cob_id);
+      m->mutable_values()->Reserve(static_cast<int>(p.values.size()));
+    }
     std::string& j = e->json;
     j.reserve(160 + p.values.size() * 96 + p.raw.size() * 2);
     h_.json(j);
@@ -160,13 +164,9 @@ class Encoder {
     field(j, "cobId", p.cob_id);
     j += ",\"values\":[";
     bool first = true;
-    m.mutable_values()->Reserve(static_cast<int>(p.values.size()));
     for (const auto& v : p.values) {
-      auto* mv = m.add_values();
-      mv->set_index(v.index);
-      mv->set_sub_index(v.sub);
+      auto* mv = m != nullptr ? m->add_values() : nullptr;
       const std::string_view type = canopen::cia309_name(v.value.type);
-      mv->set_type(std::string(type));
       if (!first) j += ',';
       first = false;
       j += "{\"index\":";
@@ -174,57 +174,69 @@ class Encoder {
       j += ",\"subIndex\":";
       append_uint(j, v.sub);
       if (detail::is_utf8(v.name)) {
-        mv->set_name(v.name);
         field(j, "name", v.name);
+        if (mv != nullptr) mv->set_name(v.name);
       } else {
-        mv->set_name(utf8(v.name));
-        field(j, "name", mv->name());
+        std::string name = utf8(v.name);
+        field(j, "name", name);
+        if (mv != nullptr) mv->set_name(std::move(name));
       }
       field(j, "type", type);
       key(j, "value");
-      if (canopen::holds_its_type(v.value)) {
-        detail::set_proto_value(*mv->mutable_value(), v.value);
+      const bool typed = canopen::holds_its_type(v.value);
+      if (typed) {
         detail::append_value_json(j, v.value);
       } else {
-        // A stack bug, not a reason to crash the gateway: null value.
-        mv->mutable_value()->set_null_value(google::protobuf::NULL_VALUE);
-        j += "null";
+        j += "null";  // a stack bug, not a reason to crash the gateway
       }
       j += '}';
+      if (mv != nullptr) {
+        mv->set_index(v.index);
+        mv->set_sub_index(v.sub);
+        mv->set_type(std::string(type));
+        if (typed)
+          detail::set_proto_value(*mv->mutable_value(), v.value);
+        else
+          mv->mutable_value()->set_null_value(google::protobuf::NULL_VALUE);
+      }
     }
     j += ']';
-    std::string* raw = m.mutable_raw();
-    raw->reserve(p.raw.size() * 2);
-    append_hex(*raw, p.raw);
-    field(j, "raw", *raw);
+    std::string raw;
+    raw.reserve(p.raw.size() * 2);
+    append_hex(raw, p.raw);
+    field(j, "raw", raw);
+    if (m != nullptr) m->set_raw(std::move(raw));
     if (p.error) {
-      m.set_error(utf8(*p.error));
-      field(j, "error", m.error());
+      std::string err = utf8(*p.error);
+      field(j, "error", err);
+      if (m != nullptr) m->set_error(std::move(err));
     }
     if (p.mpdo) {
       const auto& mp = *p.mpdo;
-      auto* mi = m.mutable_mpdo();
-      mi->set_mode(mp.destination_mode ? "dam" : "sam");
-      mi->set_address(mp.address);
-      mi->set_index(mp.index);
-      mi->set_sub_index(mp.sub);
+      const char* mode = mp.destination_mode ? "dam" : "sam";
       j += ",\"mpdo\":{\"mode\":";
-      append_json_string(j, mi->mode());
+      append_json_string(j, mode);
       field(j, "address", mp.address);
       field(j, "index", mp.index);
       field(j, "subIndex", mp.sub);
-      if (mp.local_index) {
-        mi->set_local_index(*mp.local_index);
-        field(j, "localIndex", *mp.local_index);
-      }
-      if (mp.local_sub) {
-        mi->set_local_sub_index(*mp.local_sub);
-        field(j, "localSubIndex", *mp.local_sub);
-      }
+      if (mp.local_index) field(j, "localIndex", *mp.local_index);
+      if (mp.local_sub) field(j, "localSubIndex", *mp.local_sub);
       j += '}';
+      if (m != nullptr) {
+        auto* mi = m->mutable_mpdo();
+        mi->set_mode(mode);
+        mi->set_address(mp.address);
+        mi->set_index(mp.index);
+        mi->set_sub_index(mp.sub);
+        if (mp.local_index) mi->set_local_index(*mp.local_index);
+        if (mp.local_sub) mi->set_local_sub_index(*mp.local_sub);
+      }
     }
     j += '}';
-    finish(*e, m);
+    if (m != nullptr)
+      finish(*e, *m);
+    else
+      e->ws_json = envelope_json(*e);  // binary and ws_binary stay empty
     return e;
   }
 

@@ -47,6 +47,13 @@ struct EncodeContext {
   // MQTT topic level after "canopen"; must be a valid topic level (not
   // empty, no '/', '+', '#'), see valid_gateway_id().
   std::string gateway_id;
+  // Whether PDO events get their binary protobuf payload (and its WebSocket
+  // envelope); the JSON payload and envelope are always built. Building the
+  // protobuf message is most of a PDO's encoding cost, so it is left out
+  // when no consumer can want it (MQTT format JSON and no WebSocket client
+  // asking for protobuf); EncodedEvent::binary is then empty. Other kinds,
+  // rare, always have both.
+  bool protobuf = true;
 };
 
 bool valid_gateway_id(std::string_view id);

@@ -84,9 +84,34 @@ TEST(AppDemo, SimulatedDevicesBootAreStartedAndSendDecodedPdos) {
     last = ev->seq;
     saw_tpdo = saw_tpdo || ev->topic == "canopen/test/1/5/tpdo/1";
     EXPECT_FALSE(ev->json.empty());
-    EXPECT_FALSE(ev->binary.empty());
+    // MQTT off and nobody asking for protobuf: PDOs are JSON only.
+    EXPECT_EQ(ev->binary.empty(), ev->kind == EventKind::Tpdo) << ev->topic;
   }
   EXPECT_TRUE(saw_tpdo);
+}
+
+// A consumer that wants protobuf (a WebSocket client with ?format=protobuf)
+// gets it for PDOs from the next event on.
+TEST(AppDemo, PdosCarryProtobufWhileAConsumerWantsIt) {
+  DemoRig rig;
+  bool want = false;
+  rig.app->set_protobuf_demand([&] { return want; });
+  ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
+  auto tpdos_with_binary = [&] {
+    std::size_t n = 0;
+    for (const auto& ev : rig.events) n += ev->kind == EventKind::Tpdo && !ev->binary.empty() ? 1 : 0;
+    return n;
+  };
+  EXPECT_EQ(tpdos_with_binary(), 0U);
+  want = true;
+  const auto before = rig.events.size();
+  ASSERT_TRUE(rig.run_until([&] { return tpdos_with_binary() >= 3; }));
+  for (std::size_t i = before; i < rig.events.size(); ++i) {
+    const auto& ev = rig.events[i];
+    if (ev->kind != EventKind::Tpdo) continue;
+    EXPECT_FALSE(ev->binary.empty());
+    EXPECT_FALSE(ev->ws_binary.empty());
+  }
 }
 
 TEST(AppDemo, SdoReadIsTypedFromTheEds) {

@@ -153,6 +153,29 @@ TEST(EncodeEvent, TpdoTopicAndFields) {
   EXPECT_EQ(j.at("values").as_array().at(1).as_object().at("value"), 3000);
 }
 
+// Without protobuf (nobody wants it) a PDO's JSON and WebSocket JSON
+// envelope are exactly the same; only the binary forms are left out.
+TEST(EncodeEvent, TpdoWithoutProtobufHasTheSameJson) {
+  std::vector<canopen::PdoEvent> cases(4, two_value_pdo());
+  cases[1].error = "length 1 does not match the mapping (8 bytes)";
+  cases[1].values.push_back({0x2100, 1, std::string("na\xFFme"), Value::of_real64(std::nan(""))});
+  cases[1].values.push_back({0x2101, 0, "s", Value::of_string("tab\t\"q\"")});
+  cases[2].mpdo = canopen::MpdoInfo{false, 5, 0x6041, 0, 0x2000, 1};
+  cases[3].mpdo = canopen::MpdoInfo{true, 0, 0x6200, 1, std::nullopt, std::nullopt};
+  EncodeContext json_only = kCtx;
+  json_only.protobuf = false;
+  for (const auto& p : cases) {
+    const auto full = encode_event(event(p), 1, kCtx);
+    const auto lean = encode_event(event(p), 1, json_only);
+    EXPECT_EQ(lean->json, full->json);
+    EXPECT_EQ(lean->ws_json, full->ws_json);
+    EXPECT_EQ(lean->topic, full->topic);
+    EXPECT_TRUE(lean->binary.empty());
+    EXPECT_TRUE(lean->ws_binary.empty());
+    check_consistent<pb::PdoEvent>(*full);
+  }
+}
+
 TEST(EncodeEvent, TpdoEveryValueShape) {
   canopen::PdoEvent p;
   p.node = 127;
