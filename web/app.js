@@ -596,6 +596,7 @@ function renderNodes() {
     row.querySelector('[data-field=emcy]').classList.toggle('has-emcy', (n.emcyCount || 0) > 0);
     const ident = row.querySelector('[data-field=identity]');
     setText(ident, identityText(n.identity) || '–');
+    ident.title = identityText(n.identity) || '';  // the whole text, where the cell cuts it short
   }
   $('#nodes').classList.toggle('no-ident', ids.every((id) => !state.nodes.get(id).identity));
   renderAges();
