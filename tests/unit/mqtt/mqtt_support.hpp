@@ -422,4 +422,62 @@ class V311OnlyProxy {
   std::vector<std::thread> conns_;  // accept thread only, joined at the end
 };
 
+// A TCP server on 127.0.0.1 that plays a broken broker: `on_accept(fd)` runs
+// for each new connection (e.g. read the CONNECT, write a CONNACK, or do
+// nothing); afterwards whatever a connection sends is read and ignored.
+class FakeBroker {
+ public:
+  explicit FakeBroker(std::function<void(int fd)> on_accept = {}) : on_accept_(std::move(on_accept)) {
+    listen_fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
+    socklen_t len = sizeof a;
+    ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&a), &len);
+    port_ = ntohs(a.sin_port);
+    ::listen(listen_fd_, 8);
+    thread_ = std::thread([this] { run(); });
+  }
+  ~FakeBroker() {
+    stop_ = true;
+    thread_.join();
+    ::close(listen_fd_);
+  }
+  FakeBroker(const FakeBroker&) = delete;
+  FakeBroker& operator=(const FakeBroker&) = delete;
+
+  std::string uri() const { return "tcp://127.0.0.1:" + std::to_string(port_); }
+  int accepted() const { return accepted_.load(); }
+
+ private:
+  void run() {
+    std::vector<int> conns;
+    while (!stop_) {
+      pollfd p{listen_fd_, POLLIN, 0};
+      if (::poll(&p, 1, 50) > 0) {
+        const int cfd = ::accept(listen_fd_, nullptr, nullptr);
+        if (cfd >= 0) {
+          ++accepted_;
+          conns.push_back(cfd);
+          if (on_accept_) on_accept_(cfd);
+        }
+      }
+      for (int cfd : conns) {
+        char buf[512];
+        pollfd q{cfd, POLLIN, 0};
+        if (::poll(&q, 1, 0) > 0) (void)!::read(cfd, buf, sizeof buf);
+      }
+    }
+    for (int cfd : conns) ::close(cfd);
+  }
+
+  std::function<void(int)> on_accept_;
+  int listen_fd_ = -1;
+  int port_ = 0;
+  std::atomic<int> accepted_{0};
+  std::atomic<bool> stop_{false};
+  std::thread thread_;
+};
+
 }  // namespace mqtt_test

@@ -529,47 +529,17 @@ TEST_F(MqttPublisherTest, KeepalivePingsAndNoticesASilentBroker) {
   io_.call([&] { pub_.reset(); });
 
   // A fake broker: CONNACK, then silence (reads everything, answers nothing).
-  int lfd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(::bind(lfd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  socklen_t len = sizeof a;
-  ::getsockname(lfd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::listen(lfd, 8);
-  std::atomic<int> accepted{0};
-  std::atomic<bool> stop{false};
-  std::thread fake([&] {
-    std::vector<int> conns;
-    while (!stop) {
-      pollfd p{lfd, POLLIN, 0};
-      if (::poll(&p, 1, 50) > 0) {
-        int cfd = ::accept(lfd, nullptr, nullptr);
-        if (cfd >= 0) {
-          ++accepted;
-          conns.push_back(cfd);
-          char buf[512];
-          (void)!::read(cfd, buf, sizeof buf);  // CONNECT
-          const char connack[] = {0x20, 0x03, 0x00, 0x00, 0x00};
-          (void)!::write(cfd, connack, sizeof connack);
-        }
-      }
-      for (int cfd : conns) {
-        char buf[512];
-        pollfd q{cfd, POLLIN, 0};
-        if (::poll(&q, 1, 0) > 0) (void)!::read(cfd, buf, sizeof buf);
-      }
-    }
-    for (int cfd : conns) ::close(cfd);
+  FakeBroker fake([](int fd) {
+    char buf[512];
+    (void)!::read(fd, buf, sizeof buf);  // CONNECT
+    const char connack[] = {0x20, 0x03, 0x00, 0x00, 0x00};
+    (void)!::write(fd, connack, sizeof connack);
   });
-  c.server_uri = "tcp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  c.server_uri = fake.uri();
   start_publisher(c);
-  EXPECT_TRUE(eventually([&] { return accepted >= 2; }, 6s)) << "no reconnect after the broker went silent";
+  EXPECT_TRUE(eventually([&] { return fake.accepted() >= 2; }, 6s)) << "no reconnect after the broker went silent";
   EXPECT_GE(counters().connects, 1u);
   io_.call([&] { pub_.reset(); });
-  stop = true;
-  fake.join();
-  ::close(lfd);
 }
 
 // TLS (mqtts://): a CA-signed server certificate for 127.0.0.1 is
@@ -628,32 +598,9 @@ TEST_F(MqttPublisherTest, TlsWithServerVerification) {
 // connect_timeout covers the CONNACK: a server that accepts TCP but never
 // answers is given up on and tried again with backoff.
 TEST_F(MqttPublisherTest, ConnectTimeoutWithoutConnack) {
-  int lfd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ASSERT_EQ(::bind(lfd, reinterpret_cast<sockaddr*>(&a), sizeof a), 0);
-  socklen_t len = sizeof a;
-  ::getsockname(lfd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::listen(lfd, 8);
-  std::atomic<int> accepted{0};
-  std::atomic<bool> stop{false};
-  std::thread mute([&] {
-    std::vector<int> conns;
-    while (!stop) {
-      pollfd p{lfd, POLLIN, 0};
-      if (::poll(&p, 1, 50) > 0) {
-        int cfd = ::accept(lfd, nullptr, nullptr);
-        if (cfd >= 0) {
-          ++accepted;
-          conns.push_back(cfd);
-        }
-      }
-    }
-    for (int cfd : conns) ::close(cfd);
-  });
+  FakeBroker mute;  // accepts TCP, never answers
   MqttConfig c;
-  c.server_uri = "tcp://127.0.0.1:" + std::to_string(ntohs(a.sin_port));
+  c.server_uri = mute.uri();
   c.client_id = "timeout-test";
   c.gateway_id = kGw;
   c.queue.dir = queue_dir_.path() / "q";
@@ -664,11 +611,8 @@ TEST_F(MqttPublisherTest, ConnectTimeoutWithoutConnack) {
     pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_);
     pub_->start();
   });
-  EXPECT_TRUE(eventually([&] { return accepted >= 2; }, 5s)) << "no second attempt after the timeout";
+  EXPECT_TRUE(eventually([&] { return mute.accepted() >= 2; }, 5s)) << "no second attempt after the timeout";
   EXPECT_FALSE(counters().connected);
   EXPECT_EQ(counters().connects, 0u);
   io_.call([&] { pub_.reset(); });
-  stop = true;
-  mute.join();
-  ::close(lfd);
 }
