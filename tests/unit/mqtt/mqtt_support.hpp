@@ -319,23 +319,29 @@ bool eventually(Pred pred, std::chrono::milliseconds timeout = 15s) {
 
 namespace mqtt_test {
 
+// A listening TCP socket on 127.0.0.1 and an ephemeral port (stored in `port`).
+inline int listen_on_loopback(int& port) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  int one = 1;
+  ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<sockaddr*>(&a), sizeof a);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  port = ntohs(a.sin_port);
+  ::listen(fd, 16);
+  return fd;
+}
+
 // A TCP relay in front of the broker that plays an MQTT 3.1.1-only broker:
 // a CONNECT with protocol level 5 gets CONNACK "unsupported protocol
 // version" (0x84) and is closed; anything else is relayed to the broker.
 class V311OnlyProxy {
  public:
   explicit V311OnlyProxy(int broker_port) : broker_port_(broker_port) {
-    listen_fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    int one = 1;
-    ::setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &one, sizeof one);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
-    socklen_t len = sizeof a;
-    ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&a), &len);
-    port_ = ntohs(a.sin_port);
-    ::listen(listen_fd_, 16);
+    listen_fd_ = listen_on_loopback(port_);
     acceptor_ = std::thread([this] { accept_loop(); });
   }
   ~V311OnlyProxy() {
@@ -428,15 +434,7 @@ class V311OnlyProxy {
 class FakeBroker {
  public:
   explicit FakeBroker(std::function<void(int fd)> on_accept = {}) : on_accept_(std::move(on_accept)) {
-    listen_fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    ::bind(listen_fd_, reinterpret_cast<sockaddr*>(&a), sizeof a);
-    socklen_t len = sizeof a;
-    ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&a), &len);
-    port_ = ntohs(a.sin_port);
-    ::listen(listen_fd_, 8);
+    listen_fd_ = listen_on_loopback(port_);
     thread_ = std::thread([this] { run(); });
   }
   ~FakeBroker() {
