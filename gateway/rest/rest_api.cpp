@@ -33,6 +33,13 @@ bool contains(std::optional<std::string_view> header, std::string_view what) {
 }
 bool accepts_protobuf(const Request& r) { return contains(r.header("accept"), kProtobuf); }
 bool sends_protobuf(const Request& r) { return contains(r.header("content-type"), kProtobuf); }
+// Only protobuf is acceptable to the client (no JSON, no wildcard): a route
+// that has no protobuf message answers 406 rather than JSON it cannot read.
+bool accepts_only_protobuf(const Request& r) {
+  const auto accept = r.header("accept");
+  return contains(accept, kProtobuf) && !contains(accept, "json") && !contains(accept, "*/*") &&
+         !contains(accept, "application/*");
+}
 
 Response from_reply(ApiReply reply) {
   Response r;
@@ -509,20 +516,28 @@ void register_rest_routes(http::HttpServer& server, App& app) {
   auto route = [&](const char* method, std::string_view pattern, auto fn) {
     server.add_route(method, pattern, [a, fn](const Request& req, Responder respond) { fn(*a, req, std::move(respond)); });
   };
+  // Routes whose answer exists as JSON only (no message in proto/).
+  auto json_route = [&](const char* method, std::string_view pattern, auto fn) {
+    route(method, pattern, [fn](App& a2, const Request& req, Responder respond) {
+      if (accepts_only_protobuf(req))
+        return respond(problem_response(406, "this resource is JSON only (application/json); no protobuf message"));
+      fn(a2, req, std::move(respond));
+    });
+  };
   const std::string node = "/api/v1/networks/{net}/nodes/{node}";
-  route("GET", "/api/v1/gateway", get_gateway);
-  route("GET", "/api/v1/networks/{net}", get_network);
-  route("GET", "/api/v1/networks/{net}/nodes", get_nodes);
-  route("GET", node, get_node);
+  json_route("GET", "/api/v1/gateway", get_gateway);
+  json_route("GET", "/api/v1/networks/{net}", get_network);
+  json_route("GET", "/api/v1/networks/{net}/nodes", get_nodes);
+  json_route("GET", node, get_node);
   route("GET", node + "/sdo/{index}/{sub}",
         [](App& a2, const Request& req, Responder r) { sdo(a2, false, req, std::move(r)); });
   route("PUT", node + "/sdo/{index}/{sub}",
         [](App& a2, const Request& req, Responder r) { sdo(a2, true, req, std::move(r)); });
   route("POST", node + "/nmt", nmt);
-  route("GET", node + "/od", get_od);
-  route("GET", node + "/emcy", get_emcy);
-  route("PUT", node + "/rpdo/{n}", rpdo);
-  route("POST", "/api/v1/networks/{net}/sync", sync);
+  json_route("GET", node + "/od", get_od);
+  json_route("GET", node + "/emcy", get_emcy);
+  json_route("PUT", node + "/rpdo/{n}", rpdo);
+  json_route("POST", "/api/v1/networks/{net}/sync", sync);
 }
 
 }  // namespace gateway

@@ -162,6 +162,21 @@ TEST(Rest, SdoReadInProtobuf) {
   EXPECT_EQ(back.json().as_object().at("value").to_number<int>(), 6) << back.body;
 }
 
+// Content negotiation: a route with a protobuf message answers in it; one
+// without answers JSON when JSON (or anything) is acceptable, else 406.
+TEST(Rest, JsonOnlyRoutesRefuseAProtobufOnlyAccept) {
+  RestRig rig;
+  for (const char* path : {"/api/v1/gateway", "/api/v1/networks/1/nodes", "/api/v1/networks/1/nodes/5/od"}) {
+    auto only = rig.request("GET", path, {}, {"Accept: application/x-protobuf"});
+    EXPECT_EQ(only.status, 406) << path;
+    EXPECT_EQ(only.content_type, "application/problem+json") << path;
+    auto either = rig.request("GET", path, {}, {"Accept: application/x-protobuf, application/json;q=0.5"});
+    EXPECT_EQ(either.status, 200) << path;
+    EXPECT_EQ(either.content_type, "application/json") << path;
+    EXPECT_EQ(rig.request("GET", path, {}, {"Accept: */*"}).status, 200) << path;
+  }
+}
+
 TEST(Rest, NmtStopAndStartAll) {
   RestRig rig;
   ASSERT_TRUE(rig.run_until([&] { return rig.operational(10); }));
