@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "http_status.hpp"  // reason_phrase
+
 namespace gateway::http {
 
 struct Request {
@@ -62,8 +64,6 @@ struct Response {
   static Response json(std::string body, int status = 200);
 };
 
-// Reason phrase of a status code ("Not Found"); "Unknown" when not known.
-std::string_view reason_phrase(int status);
 
 // Completes one request. See the thread-safety note at the top.
 using Responder = std::function<void(Response)>;

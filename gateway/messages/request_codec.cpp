@@ -8,6 +8,7 @@
 #include "canopen/json_value.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
+#include "http_status.hpp"
 #include "google/protobuf/stubs/logging.h"
 #include "google/protobuf/util/json_util.h"
 #include "json_text.hpp"
@@ -151,27 +152,6 @@ bool parse_proto(M& m, std::string_view body) {
   // must not be able to flood the log with it. The failure is reported.
   const google::protobuf::LogSilencer quiet;
   return m.ParseFromArray(body.data(), static_cast<int>(body.size()));
-}
-
-std::string_view reason_phrase(int status) {
-  switch (status) {
-    case 400: return "Bad Request";
-    case 401: return "Unauthorized";
-    case 403: return "Forbidden";
-    case 404: return "Not Found";
-    case 405: return "Method Not Allowed";
-    case 406: return "Not Acceptable";
-    case 409: return "Conflict";
-    case 413: return "Content Too Large";
-    case 415: return "Unsupported Media Type";
-    case 422: return "Unprocessable Content";
-    case 429: return "Too Many Requests";
-    case 500: return "Internal Server Error";
-    case 502: return "Bad Gateway";
-    case 503: return "Service Unavailable";
-    case 504: return "Gateway Timeout";
-    default: return "Error";
-  }
 }
 
 // Replies are not on a hot path: protobuf's own JSON printer, with the
