@@ -11,28 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "mqtt_support.hpp"  // TempDir
+
 namespace fs = std::filesystem;
 using gateway::mqtt::DiskQueue;
 using gateway::mqtt::DiskQueueOptions;
 using gateway::mqtt::QueuedMessage;
+using mqtt_test::TempDir;
 
 namespace {
-
-class TempDir {
- public:
-  TempDir() {
-    std::string tmpl = (fs::temp_directory_path() / "dq-XXXXXX").string();
-    path_ = ::mkdtemp(tmpl.data());
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 QueuedMessage msg(int i, std::uint8_t qos = 1, bool retained = false) {
   return QueuedMessage{"t/" + std::to_string(i), "payload-" + std::to_string(i), qos, retained};
