@@ -35,7 +35,6 @@
 #include <thread>
 #include <vector>
 
-#include "auth.hpp"
 #include "log.hpp"
 #include "rest_api.hpp"
 
@@ -150,11 +149,7 @@ int main(int argc, char** argv) {
   hc.address = "127.0.0.1";
   hc.port = 0;
   http::HttpServer server(io, hc, &log);
-  auth::HttpAuthSettings as;
-  as.enabled = config.http.auth;
-  as.anonymous = config.http.anonymous_role();
-  as.rate_limit = 0;
-  server.set_authorizer(auth::make_http_authorizer(as, app.tokens(), log));
+  server.set_authorizer(app.http_authorizer());
   register_api_routes(server, app);
   app.start();
   server.start();

@@ -12,7 +12,6 @@
 #include <boost/asio/signal_set.hpp>
 
 #include "app.hpp"
-#include "auth.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "cli.hpp"
 #include "config.hpp"
@@ -76,14 +75,9 @@ int run(const gateway::CliOptions& opts) {
     http = std::make_unique<gateway::http::HttpServer>(io, http_cfg, &log);
     app->add_consumer([srv = http.get()](const gateway::EncodedEventPtr& ev) { srv->publish(ev); });
     app->set_protobuf_demand([srv = http.get()] { return srv->binary_clients() > 0; });
-    gateway::auth::HttpAuthSettings auth;
-    auth.enabled = config.http.auth;
-    auth.anonymous = config.http.anonymous_role();
-    auth.rate_limit = config.http.rate_limit;
-    auth.rate_burst = config.http.rate_burst;
-    if (auth.enabled && config.http.tokens.empty())
+    if (config.http.auth && config.http.tokens.empty())
       log.warn("http: no tokens configured: every local process may use the API as admin (loopback only)");
-    http->set_authorizer(gateway::auth::make_http_authorizer(auth, app->tokens(), log));
+    http->set_authorizer(app->http_authorizer());
     gateway::register_api_routes(*http, *app);
     http->start();
   } catch (const std::exception& e) {

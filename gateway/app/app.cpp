@@ -744,6 +744,15 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
             opts, reply);
 }
 
+http::Authorizer App::http_authorizer() {
+  auth::HttpAuthSettings s;
+  s.enabled = config_.http.auth;
+  s.anonymous = config_.http.anonymous_role();
+  s.rate_limit = config_.http.rate_limit;
+  s.rate_burst = config_.http.rate_burst;
+  return auth::make_http_authorizer(s, tokens_, log_);
+}
+
 void App::audit(std::string_view line) {
   log_.info("audit: " + std::string(line));
   log_.flush();

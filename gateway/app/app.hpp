@@ -81,8 +81,12 @@ class App {
   // Writes one audit line ("audit: <line>", UTC time stamped, flushed at
   // once) for a write or command that did not go through handle_request.
   void audit(std::string_view line);
-  // The bearer tokens of the config (for the HTTP authorizer too).
+  // The bearer tokens of the config.
   const auth::TokenStore& tokens() const { return tokens_; }
+  // The HTTP server's authorizer for this configuration (http.auth, its
+  // tokens, the role without one, the rate limit). It refers to this App's
+  // tokens and logger: the App MUST outlive the server's use of it.
+  http::Authorizer http_authorizer();
   const StateCache& cache() const { return cache_; }
   const EventPipeline& pipeline() const { return pipeline_; }
   // The node's EDS/DCF on network `net`, if configured.

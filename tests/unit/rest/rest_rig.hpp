@@ -21,7 +21,6 @@
 #include <thread>
 #include <vector>
 
-#include "auth.hpp"
 #include "log.hpp"
 #include "rest_api.hpp"
 #include "unit/support/http_fetch.hpp"
@@ -56,12 +55,7 @@ struct RestRig {
     hc.static_dir = static_dir;
     server = std::make_unique<http::HttpServer>(io, hc);
     // The authorizer as canopen-gateway installs it (demo: auth off, everyone admin).
-    auth::HttpAuthSettings as;
-    as.enabled = c.http.auth;
-    as.anonymous = c.http.anonymous_role();
-    as.rate_limit = c.http.rate_limit;
-    as.rate_burst = c.http.rate_burst;
-    server->set_authorizer(auth::make_http_authorizer(as, app->tokens(), *log));
+    server->set_authorizer(app->http_authorizer());
     register_api_routes(*server, *app);
     app->start();
     server->start();
