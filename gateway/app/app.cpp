@@ -13,6 +13,7 @@
 #include "canopen/socketcan/service_driver.hpp"
 #include "demo_devices.hpp"
 #include "event_encoder.hpp"
+#include "json_text.hpp"
 #include "mqtt/publisher.hpp"
 #include "request_codec.hpp"
 #include "sim/asio_memory_bus.hpp"
@@ -25,6 +26,9 @@
 namespace gateway {
 
 namespace {
+
+// Who asked, for the audit log.
+std::string requester(std::string_view who) { return who.empty() ? std::string("anonymous") : std::string(who); }
 
 using canopen::can::Frame;
 
@@ -308,27 +312,39 @@ std::optional<canopen::can::BusState> App::bus_state(std::uint32_t net_number) c
 
 std::error_code App::write_rpdo(std::uint32_t net_number, std::uint8_t node, std::uint16_t number,
                                 std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
-                                canopen::Bytes* sent) {
+                                canopen::Bytes* sent, std::string_view who) {
+  const std::string line = "RPDO write by " + requester(who) +
+                           ": net " + std::to_string(net_number) + " node " + std::to_string(node) + " RPDO" +
+                           std::to_string(number);
   Net* n = net(net_number);
-  if (n == nullptr) return make_error_code(canopen::SdoAbort::NoSuchObject);
+  if (n == nullptr) {
+    const auto ec = make_error_code(canopen::SdoAbort::NoSuchObject);
+    audit(line + ": " + ec.message());
+    return ec;
+  }
   auto& tx = n->network->rpdo();
   const auto now = canopen::SteadyClock::now();
   const auto ec = raw != nullptr ? tx.set_raw(node, number, *raw, now) : tx.set_values(node, number, values, now);
-  if (ec) return ec;
-  n->driver->poke();
-  if (sent != nullptr) {
-    if (const auto* p = tx.payload(node, number)) *sent = *p;
+  if (ec) {
+    audit(line + ": " + ec.message());
+    return ec;
   }
+  n->driver->poke();
+  const auto* p = tx.payload(node, number);
+  if (sent != nullptr && p != nullptr) *sent = *p;
+  audit(line + " = " + (p != nullptr ? detail::to_hex(*p) : std::string()) + ": sent");
   return {};
 }
 
-bool App::send_sync(std::uint32_t net_number, std::optional<std::uint8_t> counter) {
+bool App::send_sync(std::uint32_t net_number, std::optional<std::uint8_t> counter, std::string_view who) {
   Net* n = net(net_number);
   if (n == nullptr) return false;
   const Frame f =
       counter ? Frame::standard(0x080, {*counter}) : Frame::standard(0x080, std::span<const std::uint8_t>{});
   n->channel->send(f);
   if (n->driver) n->driver->deliver_locally(f, n->network.get());
+  audit("SYNC by " + requester(who) + ": net " +
+        std::to_string(net_number) + (counter ? " counter " + std::to_string(*counter) : std::string()) + ": sent");
   return true;
 }
 
@@ -527,10 +543,8 @@ void App::handle_request(const ApiRequest& request, ReplyFn reply) {
     const Role anonymous = config_.mqtt.requests_role.value_or(config_.http.anonymous_role());
     if (auto d = auth::identify(identified, tokens_, anonymous)) {
       ++counters_.auth_failures;
-      log_.info("audit: auth failure: " + (identified.who.empty() ? std::string("anonymous") : identified.who) +
-                ": request to net " + std::to_string(request.network) + " node " + std::to_string(request.node) +
-                ": " + std::to_string(d->status) + " " + d->detail);
-      log_.flush();
+      audit("auth failure: " + requester(identified.who) + ": request to net " + std::to_string(request.network) +
+            " node " + std::to_string(request.node) + ": " + std::to_string(d->status) + " " + d->detail);
       reply(problem(d->status, d->detail, opts));
       return;
     }
@@ -569,8 +583,6 @@ void App::handle_request(const ApiRequest& request, ReplyFn reply) {
 
 namespace {
 
-// Who asked, for the audit log.
-std::string requester(const ApiRequest& req) { return req.who.empty() ? std::string("anonymous") : req.who; }
 
 // The type of index/sub: the request's, else the node's EDS/DCF entry's.
 // DOMAIN (raw hex) when neither knows. Error reply when the EDS lacks it.
@@ -709,19 +721,19 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   }
   ++counters_.sdo_requests;
   const canopen::Value written = *value;
-  const std::string audit = "SDO write by " + requester(req) + ": net " +
-                            std::to_string(n.number) + " node " + std::to_string(req.node) + " " + hex4(index) +
-                            " sub " + std::to_string(sub) + " = " + canopen::format_value(written);
+  const std::string line = "SDO write by " + requester(req.who) + ": net " + std::to_string(n.number) + " node " +
+                           std::to_string(req.node) + " " + hex4(index) + " sub " + std::to_string(sub) + " = " +
+                           canopen::format_value(written);
   if (own) {
     // As an SDO download would: access, length and limit checks, hooks and
     // observers (a write to 1016h reconfigures the heartbeat consumers).
     if (auto ec = n.own_od->write(index, sub, canopen::encode(written))) {
-      log_.info("audit: " + audit + ": " + ec.message());
+      audit(line + ": " + ec.message());
       reply(sdo_error_reply(ec, true, {}, opts));
       return;
     }
     n.driver->poke();
-    log_.info("audit: " + audit + ": ok");
+    audit(line + ": ok");
     reply(sdo_response(written, opts));
     return;
   }
@@ -729,15 +741,15 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   r.node = req.node;
   r.index = index;
   r.sub = sub;
-  r.on_done = [this, opts, reply, written, audit,
+  r.on_done = [this, opts, reply, written, line,
                t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
     sdo_finished(t0);
     if (!res.ok()) {
-      log_.info("audit: " + audit + ": " + res.error.message());
+      audit(line + ": " + res.error.message());
       reply(transfer_failed(res, opts));
       return;
     }
-    log_.info("audit: " + audit + ": ok");
+    audit(line + ": ok");
     reply(sdo_response(written, opts));
   };
   submitted(n, n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now()), req.node,
@@ -753,8 +765,8 @@ http::Authorizer App::http_authorizer() {
   return auth::make_http_authorizer(s, tokens_, log_);
 }
 
-void App::audit(std::string_view line) {
-  log_.info("audit: " + std::string(line));
+void App::audit(const std::string& line) {
+  log_.info("audit: " + line);
   log_.flush();
 }
 
@@ -801,9 +813,8 @@ void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
   ++counters_.nmt_commands;
   n.network->send_nmt(params->command, req.node);
   n.driver->poke();
-  log_.info("audit: NMT " + std::string(nmt_command_name(params->command)) + " by " + requester(req) + ": net " +
-            std::to_string(n.number) + " node " + std::to_string(req.node) + ": sent");
-  log_.flush();
+  audit("NMT " + std::string(nmt_command_name(params->command)) + " by " + requester(req.who) + ": net " +
+        std::to_string(n.number) + " node " + std::to_string(req.node) + ": sent");
   reply(nmt_response(n.number, req.node, params->command, opts));
 }
 
@@ -812,9 +823,8 @@ std::optional<ApiReply> App::refused(const Net& n, const ApiRequest& req, Role n
   auto d = auth::check_role(req, need);
   if (!d) return std::nullopt;
   ++counters_.auth_failures;
-  log_.info("audit: auth failure: " + requester(req) + ": " + std::string(what) + " net " + std::to_string(n.number) +
-            " node " + std::to_string(req.node) + ": " + std::to_string(d->status) + " " + d->detail);
-  log_.flush();
+  audit("auth failure: " + requester(req.who) + ": " + std::string(what) + " net " + std::to_string(n.number) +
+        " node " + std::to_string(req.node) + ": " + std::to_string(d->status) + " " + d->detail);
   return problem(d->status, d->detail, opts);
 }
 

@@ -78,9 +78,6 @@ class App {
   void set_protobuf_demand(std::function<bool()> demand) { protobuf_demand_ = std::move(demand); }
 
   const Config& config() const { return config_; }
-  // Writes one audit line ("audit: <line>", UTC time stamped, flushed at
-  // once) for a write or command that did not go through handle_request.
-  void audit(std::string_view line);
   // The bearer tokens of the config.
   const auth::TokenStore& tokens() const { return tokens_; }
   // The HTTP server's authorizer for this configuration (http.auth, its
@@ -110,14 +107,15 @@ class App {
   // EDS/DCF): either values (typed as mapped) or raw bytes (exactly the
   // mapped length). Errors as PdoTransmitter::set_values/set_raw
   // (NoSuchObject: no such network, node or RPDO). On success `sent`
-  // (optional) gets the PDO's payload after the write.
+  // (optional) gets the PDO's payload after the write. Audited as done by
+  // `who` ("" = anonymous).
   std::error_code write_rpdo(std::uint32_t net, std::uint8_t node, std::uint16_t number,
                              std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
-                             canopen::Bytes* sent = nullptr);
+                             canopen::Bytes* sent = nullptr, std::string_view who = {});
   // Sends one SYNC (with the counter when given) on network `net` and
   // delivers it to the gateway's own services (synchronous RPDOs). False
-  // for an unknown network.
-  bool send_sync(std::uint32_t net, std::optional<std::uint8_t> counter);
+  // for an unknown network. Audited as done by `who` ("" = anonymous).
+  bool send_sync(std::uint32_t net, std::optional<std::uint8_t> counter, std::string_view who = {});
   // A simulated network only: takes the gateway's side of the in-process
   // bus down or up, as an interface going down would (demos, tests). False
   // for an unknown or real network.
@@ -154,6 +152,8 @@ class App {
   // `need`; nullopt when it may.
   std::optional<ApiReply> refused(const Net& net, const ApiRequest& req, Role need, std::string_view what,
                                   const ReplyOptions& opts);
+  // Writes one audit line ("audit: <line>", UTC time stamped, flushed at once).
+  void audit(const std::string& line);
   // Records one finished SDO transfer's latency.
   void sdo_finished(std::chrono::steady_clock::time_point submitted_at);
   // A failed SDO transfer: counted, and turned into its reply (422/504/502).

@@ -442,9 +442,6 @@ void nmt(App& app, const Request& req, Responder respond) {
   app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
 }
 
-// Who asked, for audit lines.
-std::string who(const Request& req) { return req.who.empty() ? std::string("anonymous") : req.who; }
-
 void rpdo(App& app, const Request& req, Responder respond) {
   std::uint32_t net = 0;
   std::uint8_t node = 0;
@@ -468,13 +465,11 @@ void rpdo(App& app, const Request& req, Responder respond) {
   const auto& raw = body->raw;
   if (auto err = check_bus(app, net)) return respond(std::move(*err));
   canopen::Bytes sent;
-  const std::string audit = "RPDO write by " + who(req) + ": net " + std::to_string(net) + " " + what;
-  if (auto wec = app.write_rpdo(net, node, static_cast<std::uint16_t>(*number), values, raw ? &*raw : nullptr, &sent)) {
+  if (auto wec = app.write_rpdo(net, node, static_cast<std::uint16_t>(*number), values, raw ? &*raw : nullptr, &sent,
+                                req.who)) {
     const int status = wec == make_error_code(canopen::SdoAbort::NoSuchObject) ? 404 : 400;
-    app.audit(audit + ": " + wec.message());
     return respond(problem_response(status, what + ": " + wec.message()));
   }
-  app.audit(audit + " = " + hex_text(sent) + ": sent");
   json::object out;
   out["network"] = net;
   out["node"] = node;
@@ -500,9 +495,7 @@ void sync(App& app, const Request& req, Responder respond) {
     }
   }
   if (auto err = check_bus(app, net)) return respond(std::move(*err));
-  app.send_sync(net, counter);
-  app.audit("SYNC by " + who(req) + ": net " + std::to_string(net) +
-            (counter ? " counter " + std::to_string(*counter) : std::string()) + ": sent");
+  app.send_sync(net, counter, req.who);
   json::object out;
   out["network"] = net;
   out["counter"] = counter ? json::value(*counter) : json::value(nullptr);
