@@ -104,9 +104,9 @@ App::App(boost::asio::io_context& io, Config config, Logger& log)
       }()),
       encode_ctx_{config_.gateway_id},
       pipeline_(
-          [this](std::uint32_t network, const canopen::Event& ev) {
-            encode_ctx_.protobuf = (config_.mqtt.enabled && config_.mqtt.format == PayloadFormat::Protobuf) ||
-                                   (protobuf_demand_ && protobuf_demand_());
+          [this, mqtt_protobuf = config_.mqtt.enabled && config_.mqtt.format == PayloadFormat::Protobuf](
+              std::uint32_t network, const canopen::Event& ev) {
+            encode_ctx_.protobuf = mqtt_protobuf || (protobuf_demand_ && protobuf_demand_());
             return encode_event(ev, network, encode_ctx_);
           },
           cache_) {
