@@ -65,9 +65,12 @@ std::uint64_t get_le(const char* p, int bytes) {
   return v;
 }
 
-bool pread_all(int fd, char* p, std::size_t n, std::uint64_t off) {
+// Repeats a positional read or write until all n bytes are done (short
+// transfers, EINTR); false on an error or end of file.
+template <typename Ptr, typename Syscall>
+bool all_at(Syscall call, int fd, Ptr p, std::size_t n, std::uint64_t off) {
   while (n > 0) {
-    ssize_t r = ::pread(fd, p, n, static_cast<off_t>(off));
+    ssize_t r = call(fd, p, n, static_cast<off_t>(off));
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0) return false;
     p += r;
@@ -76,18 +79,8 @@ bool pread_all(int fd, char* p, std::size_t n, std::uint64_t off) {
   }
   return true;
 }
-
-bool pwrite_all(int fd, const char* p, std::size_t n, std::uint64_t off) {
-  while (n > 0) {
-    ssize_t r = ::pwrite(fd, p, n, static_cast<off_t>(off));
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) return false;
-    p += r;
-    n -= static_cast<std::size_t>(r);
-    off += static_cast<std::uint64_t>(r);
-  }
-  return true;
-}
+bool pread_all(int fd, char* p, std::size_t n, std::uint64_t off) { return all_at(::pread, fd, p, n, off); }
+bool pwrite_all(int fd, const char* p, std::size_t n, std::uint64_t off) { return all_at(::pwrite, fd, p, n, off); }
 
 std::string segment_name(std::uint64_t first) {
   char buf[32];
