@@ -12,6 +12,7 @@
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
+#include "eds_report.hpp"
 #include "google/protobuf/util/json_util.h"
 #include "json_text.hpp"
 #include "request_codec.hpp"
@@ -66,12 +67,6 @@ std::string timestamp_text(WallTime t) {
   detail::append_timestamp(out, detail::to_unix_time(t));
   if (out.size() >= 2 && out.front() == '"') out = out.substr(1, out.size() - 2);
   return out;
-}
-
-std::string index_hex(std::uint16_t index) {
-  char b[8];
-  std::snprintf(b, sizeof b, "%04X", static_cast<unsigned>(index));
-  return b;
 }
 
 // Network and node from the path: nullopt when fine, else the error response.
@@ -140,11 +135,6 @@ json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, 
   o["emcyCount"] = n.emcy_count;
   o["eds"] = app.description(net, n.id) != nullptr;
   return o;
-}
-
-json::value limit_json(const std::optional<canopen::Value>& v) {
-  if (!v) return nullptr;
-  return canopen::value_to_json(*v);
 }
 
 // ---- routes ------------------------------------------------------------------
@@ -285,33 +275,7 @@ void get_od(App& app, const Request& req, Responder respond) {
   json::object o;
   o["network"] = net;
   o["node"] = node;
-  o["vendorName"] = desc->device.vendor_name;
-  o["productName"] = desc->device.product_name;
-  o["dcf"] = desc->is_dcf;
-  json::array objects;
-  for (const auto& [index, obj] : desc->od.objects()) {
-    json::object jo;
-    jo["index"] = index;
-    jo["indexHex"] = index_hex(index);
-    jo["name"] = obj.name;
-    jo["objectCode"] = std::string(canopen::od::to_string(obj.code));
-    json::array subs;
-    for (const auto& [sub, e] : obj.subs) {
-      json::object js;
-      js["subIndex"] = sub;
-      js["name"] = e.name;
-      js["type"] = std::string(canopen::cia309_name(e.type));
-      js["access"] = std::string(canopen::od::to_string(e.access));
-      js["pdoMappable"] = e.pdo_mappable;
-      js["default"] = limit_json(e.default_value);
-      js["low"] = limit_json(e.low);
-      js["high"] = limit_json(e.high);
-      subs.push_back(std::move(js));
-    }
-    jo["subs"] = std::move(subs);
-    objects.push_back(std::move(jo));
-  }
-  o["objects"] = std::move(objects);
+  for (auto& [key, value] : gateway::edstool::dictionary_json(*desc)) o[key] = std::move(value);
   respond(json_response(o));
 }
 

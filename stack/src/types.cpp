@@ -927,4 +927,19 @@ TimeOfDay time_of_day_from_unix_ms(std::int64_t unix_ms) {
 
 std::int64_t unix_ms_from_time_of_day(const TimeOfDay& t) { return (kEpoch1984Days + t.days) * kMsPerDay + t.ms; }
 
+std::string latin1_to_utf8(std::string_view s) {
+  std::string out;
+  out.reserve(s.size() * 2);
+  for (char c : s) {
+    const auto b = static_cast<unsigned char>(c);
+    if (b < 0x80) {
+      out += c;
+    } else {
+      out += static_cast<char>(0xC0 | (b >> 6));
+      out += static_cast<char>(0x80 | (b & 0x3F));
+    }
+  }
+  return out;
+}
+
 }  // namespace canopen

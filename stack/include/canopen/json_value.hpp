@@ -40,9 +40,4 @@ boost::json::value value_to_json(const Value& v);
 
 Result<Value> value_from_json(DataType type, const boost::json::value& json);
 
-// Bytes read as Latin-1 (ISO 8859-1), written as UTF-8: how text that is not
-// valid UTF-8 is turned into valid JSON/protobuf strings. Callers check for
-// valid UTF-8 first and keep such text as it is.
-std::string latin1_to_utf8(std::string_view s);
-
 }  // namespace canopen

@@ -140,6 +140,12 @@ Result<Value> decode(DataType type, std::span<const std::uint8_t> bytes);
 Result<Value> parse_value(DataType type, std::string_view text);
 std::string format_value(const Value& v);
 
+// Bytes read as Latin-1 (ISO 8859-1), written as UTF-8: how text that is not
+// valid UTF-8 (vendor files, device strings) is turned into valid JSON and
+// protobuf strings. Callers check for valid UTF-8 first and keep such text
+// as it is.
+std::string latin1_to_utf8(std::string_view s);
+
 // Checks low <= v <= high for numeric types (either bound optional).
 // ValueTooLow / ValueTooHigh with a detail naming the limit.
 std::error_code check_limits(const Value& v, const std::optional<Value>& low, const std::optional<Value>& high,

@@ -65,6 +65,49 @@ std::string invalid(const std::string& label, const std::string& text, DataType 
   return label + " '" + text + "' is not a valid " + type_text(type) + (detail.empty() ? "" : ": " + detail);
 }
 
+// Vendor files decorate numbers: an inline comment ("0x3ED ; prevent
+// homing", "0 # No") or a C literal suffix ("0x10LL", "1U", "0.0f").
+// Returns the bare number and says what was removed in *what; nullopt when
+// there is nothing to remove.
+std::optional<std::string> bare_number(std::string_view text, std::string* what) {
+  std::string out(text);
+  std::string removed;
+  if (const auto c = out.find_first_of(";#"); c != std::string::npos && c > 0) {
+    out = std::string(trim(std::string_view(out).substr(0, c)));
+    removed = "an inline comment";
+  }
+  const bool hex = out.size() > 2 && out[0] == '0' && (out[1] == 'x' || out[1] == 'X');
+  std::size_t keep = out.size();
+  while (keep > 1 && std::string_view("uUlL").find(out[keep - 1]) != std::string_view::npos) --keep;
+  if (keep == out.size() && !hex && keep > 1 && (out.back() == 'f' || out.back() == 'F')) --keep;
+  if (keep < out.size() && keep > 0 && std::isxdigit(static_cast<unsigned char>(out[keep - 1])) != 0) {
+    removed += std::string(removed.empty() ? "" : " and ") + "the C suffix '" + out.substr(keep) + "'";
+    out.resize(keep);
+  }
+  if (removed.empty() || out.empty()) return std::nullopt;
+  if (what != nullptr) *what = removed;
+  return out;
+}
+
+// Symbolic ObjectType values some tools write ("VAR" for 0x7).
+std::optional<std::uint8_t> object_type_by_name(std::string_view name) {
+  static constexpr std::array<std::pair<std::string_view, std::uint8_t>, 7> names = {{
+      {"null", 0x0}, {"domain", 0x2}, {"deftype", 0x5}, {"defstruct", 0x6}, {"var", 0x7}, {"array", 0x8}, {"record", 0x9}}};
+  const auto lower = to_lower(name);
+  for (const auto& [n, code] : names) {
+    if (n == lower) return code;
+  }
+  return std::nullopt;
+}
+
+// Thrown inside one object's reading when that object cannot be read
+// without guessing (unknown AccessType, a structure type on a VAR, ...):
+// the object is left out with a warning, the rest of the file is used.
+struct SkipObject {
+  std::size_t line;
+  std::string reason;
+};
+
 // ---------------------------------------------------------------------------
 // Section kinds derived from the name.
 
@@ -154,8 +197,9 @@ constexpr std::array<std::string_view, 13> kSubKeys = {
 
 class Builder {
  public:
-  Builder(Diagnostics& diag, const IniFile& ini, const std::string& file_name, std::optional<std::uint8_t> node_id)
-      : d_(diag), ini_(ini), node_id_arg_(node_id) {
+  Builder(Diagnostics& diag, const IniFile& ini, const std::string& file_name, std::optional<std::uint8_t> node_id,
+          std::optional<std::uint8_t> fallback_node_id)
+      : d_(diag), ini_(ini), node_id_arg_(node_id), fallback_node_id_(fallback_node_id) {
     const auto lname = to_lower(file_name);
     out_.is_dcf = lname.ends_with(".dcf");
   }
@@ -164,8 +208,16 @@ class Builder {
 
  private:
   // -- values --
-  std::uint64_t number(const IniEntry& e, DataType t) const;
-  bool flag(const IniEntry& e) const;
+  std::uint64_t number(const IniEntry& e, DataType t);
+  bool flag(const IniEntry& e);
+  std::uint16_t data_type_code(const IniEntry& e);
+  std::uint8_t object_type_code(const IniEntry& e);
+  // parse_value() plus the repairs for what vendor files write (bare_number,
+  // two's complement hex for signed types, 0x0/0x1 for BOOLEAN, a REAL's bit
+  // pattern in hex, a DOMAIN default that is not hex); each repair warns.
+  Result<Value> parse_lenient(const IniEntry& e, std::string_view text, DataType type, const std::string& label);
+  // Warns once per file for a quirk that repeats on every object.
+  void warn_once(const std::string& kind, std::size_t line, const std::string& text);
   Parsed parse_object_value(const IniEntry* e, DataType type, std::string label = {});
   Value resolve_node_id(const IniEntry& e, const std::string& label, DataType type) const;
 
@@ -180,7 +232,8 @@ class Builder {
 
   // -- objects --
   void collect_object_sections();
-  void build_object(std::uint16_t index, const ObjSections& secs);
+  void build_object(std::uint16_t index, const ObjSections& secs);  // skips (with a warning) what read_object cannot read
+  void read_object(std::uint16_t index, const ObjSections& secs);
   Template read_template(const IniSection& s, bool domain_defaults);
   od::SubEntry finish(const Template& t, std::uint8_t sub, const Parsed* override_value);
   void check_in_limits(const Template& t, const Parsed& p) const;
@@ -190,23 +243,64 @@ class Builder {
   Diagnostics& d_;
   const IniFile& ini_;
   std::optional<std::uint8_t> node_id_arg_;
+  std::optional<std::uint8_t> fallback_node_id_;
   DeviceDescription out_;
   std::map<std::uint16_t, ObjSections> objs_;
   std::map<std::uint16_t, std::size_t> listed_;  // index -> line of its first list entry
   bool warned_param_in_eds_ = false;
+  std::set<std::string> warned_kinds_;
 };
 
-std::uint64_t Builder::number(const IniEntry& e, DataType t) const {
+void Builder::warn_once(const std::string& kind, std::size_t line, const std::string& text) {
+  if (!warned_kinds_.insert(kind).second) return;
+  d_.warn(line, text + " (reported once per file)");
+}
+
+std::uint64_t Builder::number(const IniEntry& e, DataType t) {
   auto r = parse_value(t, e.value);
+  if (!r) {
+    std::string what;
+    if (auto bare = bare_number(e.value, &what)) {
+      if (auto again = parse_value(t, *bare)) {
+        warn_once("bare:" + e.lkey, e.line, e.key + "=" + e.value + ": " + what + " ignored");
+        r = std::move(again);
+      }
+    }
+  }
   if (!r) d_.fail(e.line, invalid(e.key, e.value, t, r.error().detail));
   if (t == DataType::Boolean) return std::get<bool>(r->data) ? 1 : 0;
   return std::get<std::uint64_t>(r->data);
 }
 
-bool Builder::flag(const IniEntry& e) const {
-  auto r = parse_value(DataType::Boolean, e.value);
-  if (!r) d_.fail(e.line, e.key + "=" + e.value + ": expected 0 or 1");
-  return std::get<bool>(r->data);
+// 0/1 keys (PDOMapping, BaudRate_500, ...); some tools write them in hex.
+bool Builder::flag(const IniEntry& e) {
+  if (auto r = parse_value(DataType::Boolean, e.value)) return std::get<bool>(r->data);
+  auto r = parse_value(DataType::Unsigned8, e.value);
+  if (!r) {
+    if (auto bare = bare_number(e.value, nullptr)) r = parse_value(DataType::Unsigned8, *bare);
+  }
+  if (!r || std::get<std::uint64_t>(r->data) > 1) d_.fail(e.line, e.key + "=" + e.value + ": expected 0 or 1");
+  warn_once("flag:" + e.lkey, e.line, e.key + "=" + e.value + " read as " + std::to_string(std::get<std::uint64_t>(r->data)));
+  return std::get<std::uint64_t>(r->data) == 1;
+}
+
+std::uint16_t Builder::data_type_code(const IniEntry& e) {
+  if (!parse_value(DataType::Unsigned16, e.value)) {
+    if (const auto t = parse_type_name(e.value)) {
+      warn_once("symbolic-datatype", e.line,
+                "DataType=" + e.value + " read as 0x" + hex4(static_cast<std::uint16_t>(*t)));
+      return static_cast<std::uint16_t>(*t);
+    }
+  }
+  return static_cast<std::uint16_t>(number(e, DataType::Unsigned16));
+}
+
+std::uint8_t Builder::object_type_code(const IniEntry& e) {
+  if (const auto code = object_type_by_name(e.value)) {
+    warn_once("symbolic-objecttype", e.line, "ObjectType=" + e.value + " read as 0x" + hex4(*code).substr(3));
+    return *code;
+  }
+  return static_cast<std::uint8_t>(number(e, DataType::Unsigned8));
 }
 
 // "$NODEID", "$NODEID+0x180", "0x180+$NODEID" (CiA 306): a sum with exactly
@@ -269,30 +363,66 @@ Parsed Builder::parse_object_value(const IniEntry* e, DataType type, std::string
     p.value = resolve_node_id(*e, p.label, type);
     return p;
   }
-  auto r = parse_value(type, e->value);
-  if (r) {
-    p.value = std::move(r).value();
-    return p;
-  }
-  // Vendor files often write a signed type's bit pattern in hex
-  // (LowLimit=0x80000000 for INTEGER32): unambiguous, so read it as two's
-  // complement when it fits the type's width.
-  const auto lower = to_lower(e->value);
-  if (is_signed_integer(type) && r.code() == make_error_code(SdoAbort::ValueTooHigh) && lower.starts_with("0x")) {
-    if (auto u = parse_value(DataType::Unsigned64, e->value)) {
-      const auto bits = std::get<std::uint64_t>(u->data);
-      const auto smax = static_cast<std::uint64_t>(signed_max(type));
-      const std::uint64_t umax = smax * 2 + 1;
-      if (bits <= umax) {
-        const auto v = static_cast<std::int64_t>(bits - smax - 1) + signed_min(type);
-        p.value = Value::of_signed(type, v);
-        d_.warn(e->line, p.label + " '" + e->value + "' read as two's complement " + std::to_string(v) + " (" +
-                             type_text(type) + ")");
-        return p;
+  auto r = parse_lenient(*e, e->value, type, p.label);
+  if (!r) d_.fail(e->line, invalid(p.label, e->value, type, r.error().detail));
+  p.value = std::move(r).value();
+  return p;
+}
+
+Result<Value> Builder::parse_lenient(const IniEntry& e, std::string_view text, DataType type, const std::string& label) {
+  auto r = parse_value(type, text);
+  if (r) return r;
+  const std::string quoted = label + " '" + std::string(text) + "'";
+  if (is_numeric(type)) {
+    std::string what;
+    if (auto bare = bare_number(text, &what)) {
+      auto again = parse_lenient(e, *bare, type, label);
+      if (again) {
+        warn_once("bare:" + e.lkey, e.line, quoted + ": " + what + " ignored");
+        return again;
       }
     }
   }
-  d_.fail(e->line, invalid(p.label, e->value, type, r.error().detail));
+  const auto lower = to_lower(text);
+  const bool hex = lower.starts_with("0x");
+  // A signed type's bit pattern in hex (LowLimit=0x80000000 for INTEGER32,
+  // INTEGER8 0xFF for -1): unambiguous, read as two's complement.
+  if (is_signed_integer(type) && hex && r.code() == make_error_code(SdoAbort::ValueTooHigh)) {
+    if (auto u = parse_value(DataType::Unsigned64, text)) {
+      const auto bits = std::get<std::uint64_t>(u->data);
+      const auto smax = static_cast<std::uint64_t>(signed_max(type));
+      if (bits <= smax * 2 + 1) {
+        const auto v = static_cast<std::int64_t>(bits - smax - 1) + signed_min(type);
+        d_.warn(e.line, quoted + " read as two's complement " + std::to_string(v) + " (" + type_text(type) + ")");
+        return Value::of_signed(type, v);
+      }
+    }
+  }
+  // BOOLEAN written as a number (0x00, 0x01).
+  if (type == DataType::Boolean) {
+    if (auto u = parse_value(DataType::Unsigned8, text); u && std::get<std::uint64_t>(u->data) <= 1) {
+      warn_once("bool:" + e.lkey, e.line, quoted + " read as BOOLEAN " + std::to_string(std::get<std::uint64_t>(u->data)));
+      return Value::of_bool(std::get<std::uint64_t>(u->data) == 1);
+    }
+  }
+  // A REAL's IEEE 754 bit pattern in hex (0x40490FDB is 3.14159274f).
+  if (is_real(type) && hex) {
+    const auto bits_type = type == DataType::Real32 ? DataType::Unsigned32 : DataType::Unsigned64;
+    if (auto u = parse_value(bits_type, text)) {
+      auto v = decode(type, encode(*u));
+      if (v) {
+        d_.warn(e.line, quoted + " read as the bit pattern of " + format_value(*v) + " (" + type_text(type) + ")");
+        return v;
+      }
+    }
+  }
+  // A DOMAIN's default that is no hex data ("0", "NULL", "@ABCD", a file
+  // name): a DOMAIN is data the device makes; it starts empty.
+  if (type == DataType::Domain) {
+    d_.warn(e.line, quoted + " is not hex data; the DOMAIN starts empty");
+    return Value::zero(type);
+  }
+  return r;
 }
 
 void Builder::warn_unknown_keys(const IniSection& s, std::span<const std::string_view> known) {
@@ -397,9 +527,14 @@ void Builder::read_commissioning(const IniSection& s) {
     } else if (e.value.empty()) {
       continue;
     } else if (k == "nodeid") {
+      // 0 and FFh (unconfigured, LSS) appear in DCFs whose node-ID the
+      // configuration gives; only $NODEID values need one.
       const auto id = number(e, DataType::Unsigned8);
-      if (id < 1 || id > 127) d_.fail(e.line, "NodeID " + e.value + " is outside 1..127");
-      c.node_id = static_cast<std::uint8_t>(id);
+      if (id < 1 || id > 127) {
+        d_.warn(e.line, "NodeID " + e.value + " is not a node-ID 1..127; ignored (the configured node-ID is used)");
+      } else {
+        c.node_id = static_cast<std::uint8_t>(id);
+      }
     } else if (k == "baudrate") {
       c.baud_rate_kbit = static_cast<std::uint16_t>(number(e, DataType::Unsigned16));
     } else if (k == "netnumber") {
@@ -460,17 +595,20 @@ std::vector<std::uint16_t> Builder::read_list(const IniSection& s) {
       d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
     }
   }
+  // The entries present are the list; a count that disagrees is a slip of
+  // the tool that wrote the file.
   if (count == nullptr || count->value.empty()) {
     d_.warn(s.line, subject(s) + " has no SupportedObjects; using its " + std::to_string(entries.size()) + " entries");
   } else {
     const auto n = number(*count, DataType::Unsigned16);
-    for (const auto& [k, e] : entries) {
-      if (k == 0 || k > n) d_.fail(e->line, "entry " + e->key + " is outside SupportedObjects=" + count->value);
-    }
-    for (std::uint64_t k = 1; k <= n; ++k) {
-      if (!entries.contains(k)) {
-        d_.fail(count->line, "SupportedObjects=" + count->value + " but entry " + std::to_string(k) + " is missing");
-      }
+    std::size_t outside = 0, missing = 0;
+    for (const auto& [k, e] : entries) outside += (k == 0 || k > n) ? 1 : 0;
+    for (std::uint64_t k = 1; k <= n; ++k) missing += entries.contains(k) ? 0 : 1;
+    if (outside != 0 || missing != 0) {
+      d_.warn(count->line, "SupportedObjects=" + count->value + " but " + subject(s) + " has " +
+                               std::to_string(entries.size()) + " entries (" + std::to_string(outside) +
+                               " numbered above it, " + std::to_string(missing) + " numbers missing); the " +
+                               std::to_string(entries.size()) + " entries are used");
     }
   }
   std::vector<std::uint16_t> list;
@@ -483,8 +621,9 @@ std::vector<std::uint16_t> Builder::read_list(const IniSection& s) {
     }
     listed_.emplace(index, e->line);
     if (!objs_.contains(index) || objs_.at(index).main == nullptr) {
-      d_.fail(e->line,
-              "object 0x" + hex4(index) + " is listed in " + subject(s) + " but has no [" + hex4(index) + "] section");
+      d_.warn(e->line, "object 0x" + hex4(index) + " is listed in " + subject(s) + " but has no [" + hex4(index) +
+                           "] section; not in the dictionary");
+      continue;
     }
     list.push_back(index);
   }
@@ -529,7 +668,8 @@ void Builder::collect_object_sections() {
     if (o.main != nullptr) continue;
     if (!o.subs.empty()) {
       const auto* sub = o.subs.begin()->second;
-      d_.fail(sub->line, "sub-object section " + subject(*sub) + " has no object section [" + hex4(index) + "]");
+      d_.warn(sub->line, "sub-object section " + subject(*sub) + (o.subs.size() > 1 ? " and others" : "") +
+                             " without an object section [" + hex4(index) + "]; ignored");
     }
     for (const auto* s : {o.names, o.values, o.links}) {
       if (s != nullptr) d_.warn(s->line, "section " + subject(*s) + " has no object section; ignored");
@@ -550,22 +690,27 @@ std::map<std::uint8_t, const IniEntry*> Builder::numbered(const IniSection& s, s
       continue;
     }
     if (e.lkey.size() > 3 || std::stoul(e.lkey) == 0 || std::stoul(e.lkey) > count) {
-      d_.fail(e.line, subject(s) + ": sub-index " + e.key + " is outside 1..CompactSubObj=" + std::to_string(count));
+      d_.warn(e.line, subject(s) + ": sub-index " + e.key + " is outside 1..CompactSubObj=" + std::to_string(count) +
+                          "; ignored");
+      continue;
     }
     out[static_cast<std::uint8_t>(std::stoul(e.lkey))] = &e;
   }
   if (declared != nullptr && !declared->value.empty() && number(*declared, DataType::Unsigned8) != out.size()) {
-    d_.fail(declared->line, "NrOfEntries=" + declared->value + " but " + subject(s) + " has " +
-                                std::to_string(out.size()) + " entries");
+    d_.warn(declared->line, "NrOfEntries=" + declared->value + " but " + subject(s) + " has " +
+                                std::to_string(out.size()) + " entries; those are used");
   }
   return out;
 }
 
+// A default outside the limits is kept as the file says (the device holds
+// it at power-on); writes through the gateway are still checked.
 void Builder::check_in_limits(const Template& t, const Parsed& p) const {
   if (!p.value || (!t.low && !t.high)) return;
   std::string detail;
   if (check_limits(*p.value, t.low, t.high, &detail)) {
-    d_.fail(p.entry->line, p.label + " " + format_value(*p.value) + " is outside LowLimit/HighLimit: " + detail);
+    d_.warn(p.entry->line, p.label + " " + format_value(*p.value) + " is outside LowLimit/HighLimit (" + detail +
+                               "); kept as given");
   }
 }
 
@@ -580,28 +725,32 @@ Template Builder::read_template(const IniSection& s, bool domain_defaults) {
 
   const auto* type = s.find("datatype");
   if (type != nullptr && !type->value.empty()) {
-    const auto code = static_cast<std::uint16_t>(number(*type, DataType::Unsigned16));
+    const auto code = data_type_code(*type);
     const auto dt = data_type_from_index(code);
-    if (!dt) d_.fail(type->line, "unknown DataType 0x" + hex4(code) + " in " + subject(s));
+    if (!dt) {
+      throw SkipObject{type->line, "DataType 0x" + hex4(code) + " of " + subject(s) +
+                                       (code >= 0x20 && code < 0x60 ? " is a structure, not a value type"
+                                                                    : " is not a CiA 301 data type")};
+    }
     t.type = *dt;
   } else if (domain_defaults) {
     t.type = DataType::Domain;
   } else {
-    d_.fail(s.line, subject(s) + " has no DataType");
+    throw SkipObject{s.line, subject(s) + " has no DataType"};
   }
 
   const auto* access = s.find("accesstype");
   if (access != nullptr && !access->value.empty()) {
-    const auto a = od::parse_access(access->value);
+    const auto a = od::parse_access(trim(std::string_view(access->value).substr(0, access->value.find_first_of(";#"))));
     if (!a) {
-      d_.fail(access->line, "unknown AccessType '" + access->value + "' in " + subject(s) +
-                                " (expected ro, wo, rw, rwr, rww or const)");
+      throw SkipObject{access->line, "unknown AccessType '" + access->value + "' in " + subject(s) +
+                                         " (expected ro, wo, rw, rwr, rww or const)"};
     }
     t.access = *a;
   } else if (domain_defaults) {
     t.access = od::Access::ReadWrite;
   } else {
-    d_.fail(s.line, subject(s) + " has no AccessType");
+    throw SkipObject{s.line, subject(s) + " has no AccessType"};
   }
 
   if (const auto* pdo = s.find("pdomapping"); pdo != nullptr && !pdo->value.empty()) t.pdo_mappable = flag(*pdo);
@@ -614,18 +763,25 @@ Template Builder::read_template(const IniSection& s, bool domain_defaults) {
       d_.warn(e->line, e->key + " ignored: " + type_text(t.type) + " has no limits");
       continue;
     }
-    *p = parse_object_value(e, t.type);
-    if (p->needs_node_id) {
+    if (e->value.find('$') != std::string::npos && !out_.node_id) {
       d_.fail(e->line, e->key + " '" + e->value +
                            "' uses $NODEID but no node-ID is known (pass one, or use a DCF with "
                            "[DeviceComissioning] NodeID)");
+    }
+    // A limit that does not fit the type limits nothing the device can hold.
+    try {
+      *p = parse_object_value(e, t.type);
+    } catch (const EdsError& err) {
+      d_.warn(e->line, err.reason() + "; the limit is ignored");
     }
   }
   t.low = low.value;
   t.high = high.value;
   if (t.low && t.high && check_limits(*t.low, std::nullopt, t.high)) {
-    d_.fail(low.entry->line,
-            "LowLimit " + format_value(*t.low) + " is above HighLimit " + format_value(*t.high) + " in " + subject(s));
+    d_.warn(low.entry->line, "LowLimit " + format_value(*t.low) + " is above HighLimit " + format_value(*t.high) +
+                                 " in " + subject(s) + "; both ignored");
+    t.low.reset();
+    t.high.reset();
   }
 
   t.def = parse_object_value(s.find("defaultvalue"), t.type);
@@ -670,12 +826,20 @@ od::SubEntry Builder::finish(const Template& t, std::uint8_t sub, const Parsed* 
 }
 
 void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
+  try {
+    read_object(index, secs);
+  } catch (const SkipObject& skip) {
+    d_.warn(skip.line, skip.reason + "; object " + subject(*secs.main) + " left out");
+  }
+}
+
+void Builder::read_object(std::uint16_t index, const ObjSections& secs) {
   const IniSection& s = *secs.main;
   warn_unknown_keys(s, kObjectKeys);
 
   od::ObjectCode code = od::ObjectCode::Var;
   if (const auto* ot = s.find("objecttype"); ot != nullptr && !ot->value.empty()) {
-    switch (number(*ot, DataType::Unsigned8)) {
+    switch (object_type_code(*ot)) {
       case 0x2:
         code = od::ObjectCode::Domain;
         break;
@@ -695,16 +859,19 @@ void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
                               " is not used; object skipped");
         return;
       default:
-        d_.fail(ot->line, "unknown ObjectType " + ot->value + " in " + subject(s) +
-                              " (expected 0x2 DOMAIN, 0x7 VAR, 0x8 ARRAY or 0x9 RECORD)");
+        throw SkipObject{ot->line, "unknown ObjectType " + ot->value + " in " + subject(s) +
+                                       " (expected 0x2 DOMAIN, 0x7 VAR, 0x8 ARRAY or 0x9 RECORD)"};
     }
   }
 
   const auto* compact_e = s.find("compactsubobj");
   std::uint8_t compact = 0;
   if (compact_e != nullptr && !compact_e->value.empty()) {
-    const auto n = number(*compact_e, DataType::Unsigned8);
-    if (n > 0xFE) d_.fail(compact_e->line, "CompactSubObj=" + compact_e->value + ": sub-index above 0xFE");
+    auto n = number(*compact_e, DataType::Unsigned8);
+    if (n > 0xFE) {  // sub-index FFh is the object's structure (CiA 301 7.4.3), never an entry
+      d_.warn(compact_e->line, "CompactSubObj=" + compact_e->value + ": sub-index FFh is reserved; entries 1..254 used");
+      n = 0xFE;
+    }
     compact = static_cast<std::uint8_t>(n);
   }
   const bool is_var = code == od::ObjectCode::Var || code == od::ObjectCode::Domain;
@@ -717,9 +884,9 @@ void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
         d_.warn(subnumber->line, "SubNumber=" + subnumber->value + " ignored: CompactSubObj=" + compact_e->value +
                                      " gives " + std::to_string(compact + 1) + " sub-objects");
       }
-    } else if (n != secs.subs.size()) {
-      d_.fail(subnumber->line, "SubNumber=" + subnumber->value + " but " + subject(s) + " has " +
-                                   std::to_string(secs.subs.size()) + " sub-object sections");
+    } else if (n != secs.subs.size() && !is_var) {
+      d_.warn(subnumber->line, "SubNumber=" + subnumber->value + " but " + subject(s) + " has " +
+                                   std::to_string(secs.subs.size()) + " sub-object sections; those are used");
     }
   }
 
@@ -731,8 +898,9 @@ void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
   if (is_var) {
     if (!secs.subs.empty()) {
       const auto* sub = secs.subs.begin()->second;
-      d_.fail(sub->line, std::string(od::to_string(code)) + " object " + subject(s) +
-                             " cannot have sub-object section " + subject(*sub));
+      d_.warn(sub->line, std::string(od::to_string(code)) + " object " + subject(s) +
+                             " cannot have sub-object sections; " + subject(*sub) +
+                             (secs.subs.size() > 1 ? " and the others" : "") + " ignored");
     }
     if (compact != 0) d_.warn(compact_e->line, "CompactSubObj ignored: " + subject(s) + " is not an ARRAY or RECORD");
     obj.subs.emplace(0, finish(read_template(s, code == od::ObjectCode::Domain), 0, nullptr));
@@ -768,15 +936,18 @@ void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
     }
   } else {
     if (secs.subs.empty()) {
-      d_.fail(s.line, std::string(od::to_string(code)) + " object " + subject(s) + " has no sub-objects (no [" +
-                          hex4(index) + "subN] sections and no CompactSubObj)");
+      throw SkipObject{s.line, std::string(od::to_string(code)) + " object " + subject(s) + " has no sub-objects (no [" +
+                                   hex4(index) + "subN] sections and no CompactSubObj)"};
     }
     for (const auto& [sub, ss] : secs.subs) {
       warn_unknown_keys(*ss, kSubKeys);
       bool domain = false;
       if (const auto* ot = ss->find("objecttype"); ot != nullptr && !ot->value.empty()) {
-        const auto c = number(*ot, DataType::Unsigned8);
-        if (c != 0x7 && c != 0x2) d_.fail(ot->line, "sub-object " + subject(*ss) + " must be a VAR (ObjectType 0x7)");
+        const auto c = object_type_code(*ot);
+        if (c != 0x7 && c != 0x2) {
+          d_.warn(ot->line, "sub-object " + subject(*ss) + " has ObjectType " + ot->value +
+                                "; a sub-object is a VAR (ObjectType 0x7), read as one");
+        }
         domain = c == 0x2;
       }
       obj.subs.emplace(sub, finish(read_template(*ss, domain), sub, nullptr));
@@ -812,8 +983,8 @@ void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
       }
     }
     if (count != nullptr && !count->value.empty() && number(*count, DataType::Unsigned16) != entries.size()) {
-      d_.fail(count->line, "ObjectLinks=" + count->value + " but " + subject(ls) + " has " +
-                               std::to_string(entries.size()) + " entries");
+      d_.warn(count->line, "ObjectLinks=" + count->value + " but " + subject(ls) + " has " +
+                               std::to_string(entries.size()) + " entries; those are used");
     }
     auto& links = out_.object_links[index];
     for (const auto& [k, e] : entries) {
@@ -887,6 +1058,7 @@ DeviceDescription Builder::run() {
       d_.warn(e->line, "node-ID " + std::to_string(*out_.node_id) + " given overrides NodeID=" + e->value);
     }
   }
+  if (!out_.node_id) out_.node_id = fallback_node_id_;
 
   collect_object_sections();
   std::array<std::vector<std::uint16_t>*, 3> targets = {&out_.mandatory_objects, &out_.optional_objects,
@@ -909,22 +1081,24 @@ DeviceDescription Builder::run() {
 }  // namespace
 
 DeviceDescription parse_device_description(std::string_view text, std::string file_name,
-                                           std::optional<std::uint8_t> node_id) {
+                                           std::optional<std::uint8_t> node_id,
+                                           std::optional<std::uint8_t> fallback_node_id) {
   Diagnostics diag(file_name);
-  if (node_id && (*node_id < 1 || *node_id > 127)) {
-    diag.fail(0, "node-ID " + std::to_string(*node_id) + " is outside 1..127");
+  for (const auto& id : {node_id, fallback_node_id}) {
+    if (id && (*id < 1 || *id > 127)) diag.fail(0, "node-ID " + std::to_string(*id) + " is outside 1..127");
   }
   const IniFile ini = detail::parse_ini(text, diag);
-  return Builder(diag, ini, file_name, node_id).run();
+  return Builder(diag, ini, file_name, node_id, fallback_node_id).run();
 }
 
-DeviceDescription load_device_description(const std::filesystem::path& path, std::optional<std::uint8_t> node_id) {
+DeviceDescription load_device_description(const std::filesystem::path& path, std::optional<std::uint8_t> node_id,
+                                          std::optional<std::uint8_t> fallback_node_id) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw EdsError(path.string(), 0, "cannot open the file");
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw EdsError(path.string(), 0, "cannot read the file");
-  return parse_device_description(text.str(), path.string(), node_id);
+  return parse_device_description(text.str(), path.string(), node_id, fallback_node_id);
 }
 
 }  // namespace canopen::eds

@@ -4,6 +4,7 @@
 #include <cctype>
 
 #include "canopen/eds/eds.hpp"
+#include "canopen/types.hpp"
 
 namespace canopen::eds {
 
@@ -56,6 +57,10 @@ const IniEntry* IniSection::find(std::string_view lkey) const {
   return nullptr;
 }
 
+IniEntry* IniSection::find(std::string_view lkey) {
+  return const_cast<IniEntry*>(static_cast<const IniSection&>(*this).find(lkey));
+}
+
 namespace {
 // Long lines in messages are cut so one message stays one readable line.
 std::string quote_cut(std::string_view s) {
@@ -65,11 +70,38 @@ std::string quote_cut(std::string_view s) {
 }
 }  // namespace
 
+namespace {
+// 1-based line of the first byte that is not part of valid UTF-8, 0 if none.
+std::size_t first_non_utf8_line(std::string_view text) {
+  std::size_t line = 1;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const auto nl = text.find('\n', start);
+    const auto end = nl == std::string_view::npos ? text.size() : nl;
+    if (!parse_value(DataType::UnicodeString, text.substr(start, end - start)).ok()) return line;
+    start = end + 1;
+    ++line;
+  }
+  return 0;
+}
+}  // namespace
+
 IniFile parse_ini(std::string_view text, Diagnostics& diag) {
   constexpr std::string_view bom = "\xEF\xBB\xBF";
   if (text.starts_with(bom)) text.remove_prefix(bom.size());
 
+  // CiA 306 files are ASCII; vendors write names in Latin-1 (umlauts,
+  // degree signs). Such a file is read as Latin-1 so every name is valid
+  // UTF-8 for JSON and protobuf.
+  std::string converted;
+  if (!parse_value(DataType::UnicodeString, text).ok()) {
+    diag.warn(first_non_utf8_line(text), "text is not UTF-8; the file is read as Latin-1 (ISO 8859-1)");
+    converted = latin1_to_utf8(text);
+    text = converted;
+  }
+
   IniFile file;
+  std::size_t first_hash_comment = 0;
   std::map<std::string, std::size_t, std::less<>> by_name;  // lname -> position in file.sections
   IniSection* current = nullptr;
   std::size_t line_no = 0;
@@ -81,6 +113,13 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
 
     const std::string_view line = trim(raw);
     if (line.empty() || line.front() == ';') continue;
+    if (line.front() == '#') {  // not CiA 306, but unambiguous
+      if (first_hash_comment == 0) {
+        first_hash_comment = line_no;
+        diag.warn(line_no, "'#' comment line(s) ignored (CiA 306 comments start with ';')");
+      }
+      continue;
+    }
 
     if (line.front() == '[') {
       const auto close = line.find(']');
@@ -91,7 +130,9 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
       if (name.empty()) diag.fail(line_no, "empty section name");
       if (name.find('[') != std::string_view::npos) diag.fail(line_no, "malformed section header " + quote_cut(line));
       if (const auto rest = trim(line.substr(close + 1)); !rest.empty()) {
-        if (rest.front() != ';') diag.fail(line_no, "text after the section header " + quote_cut(line));
+        if (rest.front() != ';' && rest.front() != '#') {
+          diag.fail(line_no, "text after the section header " + quote_cut(line));
+        }
         diag.warn(line_no, "comment after the section header [" + std::string(name) + "] ignored");
       }
       std::string lname = to_lower(name);
@@ -115,7 +156,20 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
     if (current == nullptr) diag.fail(line_no, "key " + quote_cut(key) + " outside any section");
 
     std::string lkey = to_lower(key);
-    if (const IniEntry* prev = current->find(lkey)) {
+    if (IniEntry* prev = current->find(lkey)) {
+      // An empty value is an absent one: the key given once with a value is
+      // not a conflict.
+      if (prev->value.empty() != value.empty()) {
+        diag.warn(line_no, "key '" + std::string(key) + "' in [" + current->name + "] given again " +
+                               (value.empty() ? "empty" : "with a value") + " (first at line " +
+                               std::to_string(prev->line) + "); the value " +
+                               quote_cut(value.empty() ? std::string_view(prev->value) : value) + " is used");
+        if (prev->value.empty()) {
+          prev->value = std::string(value);
+          prev->line = line_no;
+        }
+        continue;
+      }
       if (prev->value != value) {
         diag.fail(line_no, "key '" + std::string(key) + "' in [" + current->name +
                                "] repeated with a different value: " + quote_cut(prev->value) + " at line " +

@@ -39,6 +39,7 @@ struct IniSection {
   std::vector<IniEntry> entries;  // file order, one per key (case-insensitive)
 
   const IniEntry* find(std::string_view lkey) const;
+  IniEntry* find(std::string_view lkey);
 };
 
 struct IniFile {
@@ -48,8 +49,9 @@ struct IniFile {
 // Splits the text into sections and keys. Strips a UTF-8 BOM, CR of CRLF,
 // surrounding whitespace and ';' comment lines. Throws (through diag) on a
 // malformed line, a key outside any section or a key repeated with another
-// value; warns on a repeated section header or a key repeated with the same
-// value.
+// value; warns on a repeated section header, a key repeated with the same
+// value or once empty and once not (the value wins), '#' comment lines, and
+// text that is not UTF-8 (then read as Latin-1, so every value is UTF-8).
 IniFile parse_ini(std::string_view text, Diagnostics& diag);
 
 std::string to_lower(std::string_view s);

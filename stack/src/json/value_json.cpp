@@ -272,19 +272,4 @@ Result<Value> value_from_json(DataType type, const json::value& j) {
   return parse_value(type, std::string_view(s.data(), s.size()));
 }
 
-std::string latin1_to_utf8(std::string_view s) {
-  std::string out;
-  out.reserve(s.size() * 2);
-  for (char c : s) {
-    const auto b = static_cast<unsigned char>(c);
-    if (b < 0x80) {
-      out += c;
-    } else {
-      out += static_cast<char>(0xC0 | (b >> 6));
-      out += static_cast<char>(0x80 | (b & 0x3F));
-    }
-  }
-  return out;
-}
-
 }  // namespace canopen

@@ -356,12 +356,19 @@ TEST(EdsDcfInline, ParameterValueInAnEdsIsUsedWithOneWarning) {
                                ": ParameterValue in a file that is not a DCF; used as the current value");
 }
 
-TEST(EdsDcfInline, NodeIdMustBe1To127) {
-  for (const std::string bad : {"0", "128", "0x80", "abc"}) {
-    const auto text = file_with("[DeviceComissioning]\nNodeID=" + bad + "\n");
-    const auto e = parse_error(text);
-    EXPECT_EQ(e.line(), line_of(text, "NodeID=")) << bad;
+// A DCF made for a node whose ID the configuration (or LSS) gives carries
+// NodeID 0 or FFh: not a node-ID, ignored with a warning.
+TEST(EdsDcfInline, NodeIdOutside1To127IsIgnored) {
+  for (const std::string odd : {"0", "128", "0x80", "0xFF"}) {
+    const auto text = file_with("[DeviceComissioning]\nNodeID=" + odd + "\n");
+    const auto d = parse(text);
+    EXPECT_FALSE(d.node_id.has_value()) << odd;
+    EXPECT_TRUE(has_warning(d, "test.eds:" + std::to_string(line_of(text, "NodeID=")) + ": NodeID " + odd +
+                                   " is not a node-ID 1..127; ignored"))
+        << odd;
   }
+  const auto text = file_with("[DeviceComissioning]\nNodeID=abc\n");
+  EXPECT_EQ(parse_error(text).line(), line_of(text, "NodeID="));
 }
 
 TEST(EdsDcfInline, DoubleMSpellingIsAcceptedWithAWarning) {

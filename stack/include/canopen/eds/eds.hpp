@@ -10,14 +10,29 @@
 // case-insensitive; numbers are decimal, 0x hex or leading-0 octal; integer
 // values may use $NODEID ("$NODEID+0x180", "0x180+$NODEID", "$NODEID").
 //
-// Harmless oddities of real vendor files (unknown sections or keys, a key
-// repeated with the same value, an object section not in any object list,
-// hex beyond a signed type's range read as two's complement, ...) are
-// accepted and reported in DeviceDescription::warnings. Anything ambiguous
-// (a key repeated with another value, a value that does not fit its type,
-// an unknown DataType or AccessType, a listed object without a section,
-// SubNumber disagreeing with the sub-object sections, a default outside its
-// limits, a malformed line, ...) throws EdsError naming the file and line.
+// Real vendor files are full of slips; the rule is: accept every file
+// whose meaning is unambiguous, with a warning ("file:line: text") in
+// DeviceDescription::warnings for each assumption made, and refuse only what
+// cannot be read without guessing. Accepted with a warning: unknown sections
+// and keys; object-list counts that disagree with their entries; listed
+// objects without a section (left out) and sections not listed (loaded);
+// SubNumber / NrOfEntries / ObjectLinks counts that disagree with what is
+// present (what is present wins); sub-object sections of a VAR or without
+// an object section (ignored); defaults outside LowLimit/HighLimit (kept);
+// limits that contradict each other or do not fit the type (ignored); a
+// signed type's value in hex two's complement; 0x0/0x1 for 0/1 keys and
+// BOOLEAN values; inline ';' or '#' comments after numbers and '#' comment
+// lines; C literal suffixes (0x10LL, 1U, 0.0f); a REAL given as its bit
+// pattern in hex; a DOMAIN default that is not hex (empty DOMAIN); symbolic
+// ObjectType/DataType (VAR, UNSIGNED8); CompactSubObj=255 (1..254 used); a
+// DCF NodeID of 0 or FFh (ignored); text that is not UTF-8 (read as
+// Latin-1); a key repeated with the same value, or once empty. An object
+// that cannot be read without guessing (unknown ObjectType, DataType or
+// AccessType, a structure type on a VAR, no sub-objects) is left out with a
+// warning. Refused with EdsError naming file and line: a malformed line, a
+// key repeated with a different value, a value that does not fit its type
+// after the repairs above, a section naming the same thing twice,
+// CompactSubObj together with sub-object sections.
 //
 // Callers: pass the node-ID the device has on the bus whenever the file may
 // use $NODEID (every EDS with default PDO/SDO/EMCY COB-IDs does); catch
@@ -131,13 +146,17 @@ struct DeviceDescription {
 
 // Reads and parses a file; file names in messages are path.string().
 // node_id (1..127) resolves $NODEID and overrides a DCF's NodeID (with a
-// warning when they differ). Throws EdsError (also when the file cannot be
-// read or node_id is out of range).
-DeviceDescription load_device_description(const std::filesystem::path& path, std::optional<std::uint8_t> node_id = {});
+// warning when they differ); fallback_node_id resolves $NODEID only when
+// neither node_id nor the DCF gives one (a checker with no node in mind).
+// Throws EdsError (also when the file cannot be read or a node-ID is out of
+// range).
+DeviceDescription load_device_description(const std::filesystem::path& path, std::optional<std::uint8_t> node_id = {},
+                                          std::optional<std::uint8_t> fallback_node_id = {});
 
 // The same on text already in memory; file_name is used in messages only
 // (and a ".dcf" ending marks a DCF).
 DeviceDescription parse_device_description(std::string_view text, std::string file_name,
-                                           std::optional<std::uint8_t> node_id = {});
+                                           std::optional<std::uint8_t> node_id = {},
+                                           std::optional<std::uint8_t> fallback_node_id = {});
 
 }  // namespace canopen::eds

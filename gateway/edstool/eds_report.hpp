@@ -1,0 +1,44 @@
+// What `canopen-eds` and the gateway say about a device description file,
+// in one place so they cannot drift apart:
+//  - check_file(): the gateway's acceptance rules (load_device_description)
+//    and its warnings, as the lines `canopen-eds check` prints
+//    (../shared/api-contract.md: "FILE: ok", "FILE: ok, N warnings" then
+//    "FILE:LINE: warning: reason", or "FILE:LINE: error: reason");
+//  - dictionary_json(): the object dictionary in the shape of
+//    GET /api/v1/networks/{net}/nodes/{node}/od (without network and node).
+//
+// Pure functions, thread-safe.
+#pragma once
+
+#include <boost/json/object.hpp>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "canopen/eds/eds.hpp"
+
+namespace gateway::edstool {
+
+struct CheckResult {
+  bool accepted = false;
+  std::vector<std::string> lines;  // what `canopen-eds check` prints for the file, in order
+};
+
+// node_id as the gateway would pass it (the node's configured ID); without
+// one, a DCF's NodeID is used, else 1, so $NODEID expressions can be checked.
+CheckResult check_file(const std::filesystem::path& file, std::optional<std::uint8_t> node_id = {});
+
+// A warning of DeviceDescription::warnings ("file:line: text") of the
+// file named `file` as "file:line: warning: text".
+std::string warning_line(const std::string& file, const std::string& warning);
+// An EdsError as "file:line: error: reason" ("file: error: reason" for line 0).
+std::string error_line(const canopen::eds::EdsError& e);
+
+// {"vendorName", "productName", "dcf", "objects": [{"index", "indexHex",
+// "name", "objectCode", "subs": [{"subIndex", "name", "type", "access",
+// "pdoMappable", "default", "low", "high"}]}]}
+boost::json::object dictionary_json(const canopen::eds::DeviceDescription& d);
+
+}  // namespace gateway::edstool
