@@ -130,6 +130,11 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
     if (node.eds.empty() && !cfg.simulated) continue;
     try {
       auto desc = cfg.simulated ? demo_description(node.id) : canopen::eds::load_device_description(node.eds, node.id);
+      if (!desc.warnings.empty()) {
+        log_.info(n.label + " node " + std::to_string(node.id) + ": " + std::to_string(desc.warnings.size()) +
+                  " warning(s) reading " + node.eds + " (accepted; `canopen-eds check " + node.eds +
+                  "` lists them, as does --log-level debug)");
+      }
       for (const auto& w : desc.warnings) log_.debug(n.label + " node " + std::to_string(node.id) + " EDS: " + w);
       n.descriptions.emplace(node.id, std::move(desc));
     } catch (const canopen::eds::EdsError& e) {

@@ -1,5 +1,7 @@
 #include "config.hpp"
 
+#include "canopen/eds/eds.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -452,6 +454,13 @@ Config merge(Config c, const CliOptions& cli) {
   for (const auto& e : cli.eds) {
     std::error_code ec;
     if (!fs::is_regular_file(e.file, ec)) throw ConfigError("--eds " + std::to_string(e.node) + "=" + e.file + ": file not found");
+    // Read now, with the rules every other path uses, so a file that no
+    // network takes (--demo alone) is still checked.
+    try {
+      (void)canopen::eds::load_device_description(e.file, static_cast<std::uint8_t>(e.node));
+    } catch (const canopen::eds::EdsError& err) {
+      throw ConfigError("--eds " + std::to_string(e.node) + "=" + e.file + ": " + err.what());
+    }
     for (auto& net : c.networks) {
       if (net.simulated) continue;
       auto it = std::find_if(net.nodes.begin(), net.nodes.end(), [&](const NodeConfig& n) { return n.id == e.node; });

@@ -459,6 +459,10 @@ void Builder::read_file_info(const IniSection& s) {
       *it->second = e.value;
     }
   }
+  // Informative only (nothing here depends on it); tools write "402", "4", "3".
+  if (const auto* v = s.find("edsversion"); v != nullptr && v->value != "4.0" && v->value != "3.0") {
+    d_.warn(v->line, "EDSVersion=" + v->value + " is not a CiA 306 version (4.0); read as a 4.0 file");
+  }
 }
 
 void Builder::read_device_info(const IniSection& s) {

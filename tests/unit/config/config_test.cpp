@@ -6,6 +6,8 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 
@@ -224,6 +226,22 @@ TEST(Config, EdsFlagDescribesTheNodeOnEveryNetwork) {
   }
   cli.eds = {{5, "/missing.eds"}};
   EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--eds 5=/missing.eds: file not found"));
+}
+
+// --demo --eds N=FILE: no real network takes the file, yet it is read with
+// the same rules as every other path (and `canopen-eds check`).
+TEST(Config, EdsFlagFileIsReadEvenWithDemoAlone) {
+  const auto dir = std::filesystem::temp_directory_path() / ("cfg-eds-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto bad = (dir / "bad.eds").string();
+  std::ofstream(bad) << "[1000]\nParameterName=Device type\nDataType=0x0007\nAccessType=ro\nDefaultValue=zz\n";
+  CliOptions cli;
+  cli.demo = true;
+  cli.eds = {{5, bad}};
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--eds 5=" + bad + ": " + bad + ":5: DefaultValue 'zz'"));
+  cli.eds = {{5, kEds}};
+  EXPECT_NO_THROW(merge(Config{}, cli));
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Config, DemoAddsASimulatedNetworkWithoutAuth) {
