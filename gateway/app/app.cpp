@@ -360,6 +360,11 @@ bool App::set_simulated_link(std::uint32_t net_number, bool up) {
   return true;
 }
 
+canopen::can::MemoryBus* App::simulated_bus(std::uint32_t net_number) {
+  Net* n = net(net_number);
+  return n == nullptr || !n->memory_bus ? nullptr : &n->memory_bus->bus();
+}
+
 std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
   return nets_[net_number - 1]->channel->stats();
@@ -673,6 +678,11 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
   r.node = req.node;
   r.index = index;
   r.sub = sub;
+  // The reply must decode as `type`, so a fixed-size type is the size to
+  // expect: small objects then skip the block initiate (7.2.4.3.13), which
+  // costs devices without block transfer a refusal. Strings and domains
+  // stay unknown.
+  r.expected_size = canopen::fixed_size(type);
   ++counters_.sdo_requests;
   r.on_done = [this, type, opts, reply, t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
     sdo_finished(t0);

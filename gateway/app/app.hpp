@@ -44,6 +44,10 @@ namespace canopen::socketcan {
 class LinkMonitor;
 }
 
+namespace canopen::can {
+class MemoryBus;
+}
+
 namespace gateway {
 
 class App {
@@ -120,6 +124,10 @@ class App {
   // bus down or up, as an interface going down would (demos, tests). False
   // for an unknown or real network.
   bool set_simulated_link(std::uint32_t net, bool up);
+  // A simulated network only: its in-process bus, e.g. for tests to watch
+  // or disturb its frames (can::BusFaults). nullptr for an unknown or real
+  // network.
+  canopen::can::MemoryBus* simulated_bus(std::uint32_t net);
 
   struct Counters {
     std::uint64_t sdo_requests = 0;

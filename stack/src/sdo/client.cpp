@@ -106,13 +106,13 @@ void SdoClient::start(std::uint8_t node, Job job, TimePoint now) {
   t.deadline = now + t.timeout;
   t.last_progress = kNeverReported;
   running_.push_back(node);
-  send_initiate(node, t);
+  send_initiate(node, t, now);
 }
 
-void SdoClient::send_initiate(std::uint8_t node, Transfer& t) {
+void SdoClient::send_initiate(std::uint8_t node, Transfer& t, TimePoint now) {
   const Node& n = nodes_[node];
   const Mode mode = t.job.req.mode;
-  const bool block_ok = n.block != BlockSupport::Unsupported;
+  const bool block_ok = block_allowed(node, now);
   if (t.job.upload) {
     const bool small = t.job.req.expected_size && *t.job.req.expected_size <= cfg_.block_threshold;
     if (mode == Mode::Block || (mode == Mode::Auto && block_ok && !small)) {
@@ -225,9 +225,22 @@ void SdoClient::on_time(TimePoint now) {
     const std::uint8_t node = due[i];
     const Node& n = nodes_[node];
     if (!n.active || n.active->deadline > now) continue;
-    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(n.active->timeout).count();
-    fail_local(node, SdoAbort::Timeout,
-               "no response from node " + std::to_string(node) + " within " + std::to_string(ms) + " ms", now);
+    const Transfer& t = *n.active;
+    if (t.stray_refusal && t.job.req.mode == Mode::Auto) {
+      // A 05040001h with a stale multiplexer and no answer since: the server
+      // refused the block initiate (see the header). Abort in case it is
+      // only slow, then go the normal way.
+      send(n, abort_transfer(t.mux, to_abort_code(SdoAbort::Timeout)));
+      refuse_block(node, now);
+      continue;
+    }
+    const auto ms = std::chrono::duration_cast<std::chrono::milliseconds>(t.timeout).count();
+    std::string detail = "no response from node " + std::to_string(node) + " within " + std::to_string(ms) + " ms";
+    if (t.stray_refusal) {
+      detail += "; it sent abort 05040001h for " + mux_text(*t.stray_refusal) +
+                " instead, maybe a refusal of block transfer";
+    }
+    fail_local(node, SdoAbort::Timeout, std::move(detail), now);
   }
 }
 
@@ -244,7 +257,22 @@ void SdoClient::set_node_cob_ids(std::uint8_t node, std::uint32_t request_id, st
 }
 
 void SdoClient::forget_block_support(std::uint8_t node) {
-  if (node > 0 && node < nodes_.size()) nodes_[node].block = BlockSupport::Unknown;
+  if (node > 0 && node < nodes_.size()) nodes_[node].no_block_until = TimePoint{};
+}
+
+bool SdoClient::block_allowed(std::uint8_t node, TimePoint now) const {
+  return node > 0 && node < nodes_.size() && now >= nodes_[node].no_block_until;
+}
+
+// Remembers the refusal and restarts the running request the normal way.
+void SdoClient::refuse_block(std::uint8_t node, TimePoint now) {
+  Node& n = nodes_[node];
+  const Duration wait = std::max(cfg_.block_retry_interval, Duration::zero());
+  n.no_block_until = now < TimePoint::max() - wait ? now + wait : TimePoint::max();
+  Job job = std::move(n.active->job);
+  n.active.reset();
+  std::erase(running_, node);
+  start(node, std::move(job), now);
 }
 
 std::size_t SdoClient::pending(std::uint8_t node) const {
@@ -274,6 +302,11 @@ bool SdoClient::on_frame(const can::Frame& frame, TimePoint now) {
   }
   const PayloadView p = payload_of(frame);
   Transfer& t = *n.active;
+  if (is_abort(t, p) && multiplexer(p) != t.mux) {
+    // Not this transfer's abort: it neither ends nor advances it.
+    stray_abort(t, p);
+    return true;
+  }
   if (is_duplicate(t, p)) return true;
   t.last_rx.emplace();
   std::copy(p.begin(), p.end(), t.last_rx->begin());
@@ -283,6 +316,7 @@ bool SdoClient::on_frame(const can::Frame& frame, TimePoint now) {
   if (!n.active || n.active->job.id != id) return true;
   Transfer& still = *n.active;
   still.deadline = now + still.timeout;
+  still.stray_refusal.reset();  // the server answered: the stray abort was no refusal
   if (still.progress_due) {
     // Copy: the handler may cancel this very transfer and destroy the original.
     const ProgressHandler h = still.job.req.on_progress;
@@ -291,6 +325,21 @@ bool SdoClient::on_frame(const can::Frame& frame, TimePoint now) {
     h(done, total);
   }
   return true;
+}
+
+bool SdoClient::is_abort(const Transfer& t, PayloadView p) const {
+  // Where block upload segments flow, byte 0 is c|seqno and only 80h (c=1,
+  // seqno 0, not a valid segment) is an abort.
+  if (t.step == Step::BlockUploadSubBlock || t.step == Step::BlockUploadEnd) return p[0] == 0x80U;
+  return command_bits(p) == static_cast<std::uint8_t>(ServerCommand::Abort);
+}
+
+void SdoClient::stray_abort(Transfer& t, PayloadView p) {
+  ++stray_aborts_;
+  const bool initiating = t.step == Step::BlockUploadInitiate || t.step == Step::BlockDownloadInitiate;
+  if (initiating && abort_code(p) == static_cast<std::uint32_t>(SdoAbort::InvalidCommand)) {
+    t.stray_refusal = multiplexer(p);
+  }
 }
 
 bool SdoClient::is_duplicate(const Transfer& t, PayloadView p) const {
@@ -332,17 +381,14 @@ void SdoClient::handle(std::uint8_t node, PayloadView p, TimePoint now) {
   Node& n = nodes_[node];
   Transfer& t = *n.active;
   const auto scs = static_cast<ServerCommand>(command_bits(p));
+  if (is_abort(t, p)) return remote_abort(node, p, now);
   if (t.step == Step::BlockUploadSubBlock || t.step == Step::BlockUploadEnd) {
-    // Where segments flow, byte 0 is c|seqno and only 80h (c=1, seqno 0,
-    // not a valid segment) is an abort.
-    if (p[0] == 0x80U) return remote_abort(node, p, now);
     if (t.step == Step::BlockUploadSubBlock) return on_block_upload_segment(node, p, now);
     if (scs == ServerCommand::BlockUpload && (p[0] & 0x01U) != 0) return on_block_upload_end(node, p, now);
     // Anything else after the last segment is a late resend that crossed
     // our acknowledgement: the data is complete, so it is ignored.
     return;
   }
-  if (scs == ServerCommand::Abort) return remote_abort(node, p, now);
   const std::uint8_t sub = block_sub_command(p);
   switch (t.step) {
     case Step::ExpeditedDownload:
@@ -402,19 +448,14 @@ void SdoClient::handle(std::uint8_t node, PayloadView p, TimePoint now) {
              now);
 }
 
+// An abort for the transfer's own multiplexer (stray ones never get here).
 void SdoClient::remote_abort(std::uint8_t node, PayloadView p, TimePoint now) {
-  Node& n = nodes_[node];
-  Transfer& t = *n.active;
+  const Transfer& t = *nodes_[node].active;
   const std::uint32_t code = abort_code(p);
   if (code == static_cast<std::uint32_t>(SdoAbort::InvalidCommand) && t.job.req.mode == Mode::Auto &&
       (t.step == Step::BlockDownloadInitiate || t.step == Step::BlockUploadInitiate)) {
     // The server has no block transfer: remember, and redo it the normal way.
-    n.block = BlockSupport::Unsupported;
-    Job job = std::move(t.job);
-    n.active.reset();
-    std::erase(running_, node);
-    start(node, std::move(job), now);
-    return;
+    return refuse_block(node, now);
   }
   if (code == 0) {
     // Not a valid abort code; it must still not read as success.

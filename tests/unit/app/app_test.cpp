@@ -9,6 +9,9 @@
 
 #include <boost/json.hpp>
 #include <cstdio>
+#include <vector>
+
+#include "canopen/can/memory_bus.hpp"
 
 namespace gateway {
 namespace {
@@ -122,6 +125,46 @@ TEST(AppDemo, SdoReadIsTypedFromTheEds) {
   const auto json = boost::json::parse(reply.body).as_object();
   EXPECT_EQ(json.at("type").as_string(), "u32");
   EXPECT_EQ(json.at("value").to_number<std::uint32_t>() & 0xFFFF, 402U) << "a CiA 402 device";
+}
+
+// CiA 301 7.2.4.3.13: the gateway passes the size the EDS type implies, so
+// a fixed-size object (Statusword, u16; or a ?type= given) is read with a
+// normal upload initiate (ccs 2: 40h) and a device without block transfer
+// costs nothing extra; only an object of unknown size (a VISIBLE_STRING)
+// opens with a block initiate (A4h, pst 64).
+TEST(AppDemo, SdoReadOfAFixedSizeObjectUsesANormalUpload_7_2_4_3_13) {
+  DemoRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
+  canopen::can::MemoryBus* bus = rig.app->simulated_bus(1);
+  ASSERT_NE(bus, nullptr);
+  std::vector<canopen::can::Frame> requests;  // to node 5's SDO server
+  canopen::can::BusFaults watch;
+  watch.verdict = [&requests](const canopen::can::Frame& f, std::uint64_t) {
+    if (f.id == 0x605) requests.push_back(f);
+    return canopen::can::FrameVerdict::Deliver;
+  };
+  bus->set_faults(watch);
+  auto first_request = [&requests] {
+    std::vector<unsigned> b;
+    if (!requests.empty()) b.assign(requests.front().data.begin(), requests.front().data.begin() + 6);
+    return b;
+  };
+
+  const auto status = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x6041", "subIndex": 0})");
+  ASSERT_EQ(status.status, 200) << status.body;
+  EXPECT_EQ(requests.size(), 1U) << "one expedited round trip";
+  EXPECT_EQ(first_request(), (std::vector<unsigned>{0x40, 0x41, 0x60, 0x00, 0x00, 0x00}));
+
+  requests.clear();
+  const auto typed = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x5FFF", "subIndex": 0, "type": "u32"})");
+  EXPECT_EQ(typed.status, 422) << typed.body;
+  EXPECT_EQ(first_request(), (std::vector<unsigned>{0x40, 0xFF, 0x5F, 0x00, 0x00, 0x00}));
+
+  requests.clear();
+  const auto name = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x1008", "subIndex": 0})");
+  ASSERT_EQ(name.status, 200) << name.body;
+  EXPECT_THAT(name.body, HasSubstr("SD-402"));
+  EXPECT_EQ(first_request(), (std::vector<unsigned>{0xA4, 0x08, 0x10, 0x00, 0x7F, 0x40}));
 }
 
 TEST(AppDemo, SdoErrorsMapToStatusCodes) {

@@ -190,6 +190,26 @@ TEST(BootConfigurator, BootUp_IdentityMatches_DcfWritten_NodeStartedAndHeartbeat
   EXPECT_EQ(n.heartbeats.back().state, NmtState::Operational);
 }
 
+// The identity and COB-ID reads are UNSIGNED32: they go out as normal upload
+// initiates (CiA 301 7.2.4.3.5, 40h), never as block initiates (7.2.4.3.13),
+// so a device without block transfer costs no refusal while booting.
+TEST(BootConfigurator, Reads_7_2_4_3_5_AreNormalUploadsNotBlockInitiates) {
+  Network n;
+  std::vector<std::uint8_t> commands;  // byte 0 of every SDO request to the node
+  n.device_filter = [&commands](const can::Frame& f) {
+    if (f.id == 0x600 + kNode) commands.push_back(f.data[0]);
+    return true;
+  };
+  ASSERT_TRUE(n.boot->configure(kNode, boot_config_from_dcf(n.dcf)));
+  n.slave->start(n.clock.now());
+  n.run_for(2s);
+  ASSERT_EQ(n.steps().back(), Step::Done);
+  const auto uploads = std::count(commands.begin(), commands.end(), std::uint8_t{0x40});
+  EXPECT_GE(uploads, 5) << "1000h and 1018h sub 1..4 at least";
+  EXPECT_EQ(std::count_if(commands.begin(), commands.end(), [](std::uint8_t c) { return (c & 0xE0U) == 0xA0U; }), 0)
+      << "no block upload initiate";
+}
+
 TEST(BootConfigurator, PdoRemapping_7_5_2_35_InvalidateCountZeroEntriesCountThenValidCobId) {
   Network n;
   struct Write {

@@ -395,6 +395,206 @@ TEST(SdoClient, ForcedBlockDoesNotFallBack) {
   EXPECT_EQ(out.result->origin, Origin::Remote);
 }
 
+// ---- stray aborts and learning block support (7.2.4.3.13, 7.2.4.3.17) ----------------------------------
+
+// Runs `before` on every request frame the server gets, ahead of the server
+// itself; frames `before` returns true for are not passed on.
+void intercept(Network& net, std::function<bool(PayloadView request)> before) {
+  net.server_ep->on_frames([&net, before = std::move(before)](std::span<const can::Frame> fs) {
+    for (const auto& f : fs) {
+      if (f.id == 0x600 + kNode && before(payload_of(f))) continue;
+      net.server->on_frame(f, net.clock.now());
+    }
+  });
+}
+
+std::size_t count_starting(const std::vector<std::string>& frames, std::string_view prefix) {
+  return static_cast<std::size_t>(
+      std::count_if(frames.begin(), frames.end(), [prefix](const std::string& s) { return s.starts_with(prefix); }));
+}
+
+// 7.2.4.3.17: the abort's m is the multiplexer of the aborted transfer. One
+// for another object (here 1000h, e.g. late for an earlier transfer) is not
+// this transfer's: the block upload goes on, and the server is not taken to
+// refuse block transfer, not even for an 05040001h answering the initiate.
+TEST(SdoClient, StrayAbortForAnotherObjectDoesNotEndTheTransfer_7_2_4_3_17) {
+  Network net;
+  net.log_limit = 1000;
+  intercept(net, [&net](PayloadView p) {
+    if (p[0] == 0xA4 || p[0] == 0xA3) {  // block upload initiate, start
+      const std::uint32_t code = p[0] == 0xA4 ? 0x05040001 : 0x08000020;
+      net.server_ep->send(make_frame(0x580 + kNode, abort_transfer({0x1000, 0}, code)));
+    }
+    return false;
+  });
+  const Bytes data = test::pattern(1000);
+  ASSERT_FALSE(net.od.set(test::kBigDomain, 0, Value::of_bytes(DataType::Domain, data)));
+  Outcome out;
+  Request r = request(test::kBigDomain);
+  r.on_done = out.handler();
+  ASSERT_TRUE(net.client->upload(r, net.clock.now()));
+  const auto steps = net.run([&] { return out.done(); });
+  ASSERT_TRUE(steps.has_value());
+  EXPECT_EQ(*steps, 0) << "no timeout";
+  ASSERT_TRUE(out.result->ok()) << describe(*out.result);
+  EXPECT_TRUE(out.result->data == data);
+  EXPECT_EQ(net.client->stray_aborts(), 2U);
+  EXPECT_TRUE(net.client->block_allowed(kNode, net.clock.now()));
+  EXPECT_EQ(count_starting(net.requests(), "40"), 0U) << "no fallback to a normal upload";
+  EXPECT_EQ(count_starting(net.requests(), "80"), 0U) << "the client aborted nothing";
+
+  // The next large upload is a block upload again.
+  net.log.clear();
+  Outcome again;
+  r.on_done = again.handler();
+  ASSERT_TRUE(net.client->upload(r, net.clock.now()));
+  ASSERT_TRUE(net.run([&] { return again.done(); }));
+  ASSERT_TRUE(again.result->ok()) << describe(*again.result);
+  EXPECT_EQ(net.requests().front().substr(0, 2), "A4");
+}
+
+// 7.2.4.3.5 vs 7.2.4.3.13: an upload whose expected size is at most
+// block_threshold opens with the normal initiate (ccs=2, 40h), larger or
+// unknown ones with the block initiate (ccs=5, A4h, pst = threshold).
+TEST(SdoClient, SmallExpectedSizeUploadsWithANormalInitiate_7_2_4_3_5) {
+  struct SizeCase {
+    std::optional<std::size_t> expected;
+    std::size_t actual;
+    const char* initiate;
+  };
+  for (const SizeCase c :
+       {SizeCase{4, 4, "40 05 20 00 00 00 00 00"}, SizeCase{64, 64, "40 05 20 00 00 00 00 00"},
+        SizeCase{65, 65, "A4 05 20 00 7F 40 00 00"}, SizeCase{std::nullopt, 4, "A4 05 20 00 7F 40 00 00"}}) {
+    SCOPED_TRACE(c.expected ? std::to_string(*c.expected) : std::string("unknown"));
+    Network net;
+    const Bytes data = test::pattern(c.actual);
+    ASSERT_FALSE(net.od.set(test::kBigDomain, 0, Value::of_bytes(DataType::Domain, data)));
+    Outcome out;
+    Request r = request(test::kBigDomain);
+    r.expected_size = c.expected;
+    r.on_done = out.handler();
+    ASSERT_TRUE(net.client->upload(r, net.clock.now()));
+    ASSERT_TRUE(net.run([&] { return out.done(); }));
+    ASSERT_TRUE(out.result->ok()) << describe(*out.result);
+    EXPECT_TRUE(out.result->data == data);
+    ASSERT_FALSE(net.requests().empty());
+    EXPECT_EQ(net.requests().front(), c.initiate);
+  }
+}
+
+// A device without block transfer costs nothing on reads of known small
+// size: one request, one response, and nothing learned or forgotten.
+TEST(SdoClient, SmallReadsFromADeviceWithoutBlockTakeOneRoundTrip) {
+  Network net;
+  make_legacy(net);
+  Outcome out;
+  Request r = request(test::kDeviceType);
+  r.expected_size = 4;
+  r.on_done = out.handler();
+  ASSERT_TRUE(net.client->upload(r, net.clock.now()));
+  const auto steps = net.run([&] { return out.done(); });
+  ASSERT_TRUE(steps.has_value());
+  EXPECT_EQ(*steps, 0);
+  ASSERT_TRUE(out.result->ok()) << describe(*out.result);
+  EXPECT_EQ(net.requests(), std::vector<std::string>{"40 00 10 00 00 00 00 00"});
+  EXPECT_EQ(net.responses().size(), 1U);
+}
+
+// A refusal for the request's own index/sub-index (05040001h answering the
+// block initiate) is learnt: Auto transfers to that node go the normal way
+// for block_retry_interval, then block is tried again.
+TEST(SdoClient, RefusedBlockIsLearntAndRetriedAfterTheInterval) {
+  ClientConfig cfg;
+  cfg.block_retry_interval = 60s;
+  Network net(cfg);
+  make_legacy(net);
+  auto read_string = [&net] {
+    net.log.clear();
+    Outcome out;
+    Request r = request(test::kString);  // VISIBLE_STRING: size unknown
+    r.on_done = out.handler();
+    EXPECT_TRUE(net.client->upload(r, net.clock.now()));
+    const auto steps = net.run([&] { return out.done(); });
+    EXPECT_EQ(steps, std::optional<int>(0)) << "no timeout";
+    EXPECT_TRUE(out.done() && out.result->ok());
+    return net.requests();
+  };
+  const TimePoint start = net.clock.now();
+  auto reqs = read_string();
+  ASSERT_GE(reqs.size(), 2U);
+  EXPECT_EQ(reqs[0], "A4 01 20 00 7F 40 00 00");
+  EXPECT_EQ(reqs[1], "40 01 20 00 00 00 00 00") << "restarted at once the normal way";
+  EXPECT_FALSE(net.client->block_allowed(kNode, net.clock.now()));
+
+  net.clock.advance_to(start + 59s);
+  reqs = read_string();
+  EXPECT_EQ(count_starting(reqs, "A4"), 0U) << "still within the interval";
+  EXPECT_EQ(reqs.front(), "40 01 20 00 00 00 00 00");
+
+  net.clock.advance_to(start + 60s);
+  EXPECT_TRUE(net.client->block_allowed(kNode, net.clock.now()));
+  reqs = read_string();
+  ASSERT_GE(reqs.size(), 2U);
+  EXPECT_EQ(reqs[0], "A4 01 20 00 7F 40 00 00") << "block tried again";
+  EXPECT_EQ(reqs[1], "40 01 20 00 00 00 00 00");
+  EXPECT_FALSE(net.client->block_allowed(kNode, net.clock.now())) << "and learnt again";
+}
+
+// CANopenNode built without block transfer refuses a block initiate with
+// 05040001h carrying the multiplexer of its previous transfer. That abort
+// is stray, but the silence after it confirms the refusal: after one
+// timeout the request goes the normal way instead of failing, and the node
+// is treated as refusing block transfer.
+TEST(SdoClient, RefusalWithAStaleMultiplexerIsConfirmedBySilence) {
+  ClientConfig cfg;
+  cfg.default_timeout = 300ms;
+  Network net(cfg);
+  std::optional<Multiplexer> previous;
+  intercept(net, [&net, &previous](PayloadView p) {
+    const auto ccs = static_cast<ClientCommand>(command_bits(p));
+    if (ccs == ClientCommand::BlockUpload || ccs == ClientCommand::BlockDownload) {
+      net.server_ep->send(make_frame(0x580 + kNode, abort_transfer(previous.value_or(Multiplexer{}), 0x05040001)));
+      return true;
+    }
+    if (ccs == ClientCommand::InitiateUpload || ccs == ClientCommand::InitiateDownload) previous = multiplexer(p);
+    return false;
+  });
+  Outcome first, name, again;
+  Request r = request(test::kDeviceType);
+  r.expected_size = 4;
+  r.on_done = first.handler();
+  ASSERT_TRUE(net.client->upload(r, net.clock.now()));
+  ASSERT_TRUE(net.run([&] { return first.done(); }));
+  ASSERT_TRUE(first.result->ok());
+
+  net.log.clear();
+  const TimePoint start = net.clock.now();
+  Request s = request(test::kString);
+  s.on_done = name.handler();
+  ASSERT_TRUE(net.client->upload(s, start));
+  ASSERT_TRUE(net.run([&] { return name.done(); }));
+  ASSERT_TRUE(name.result->ok()) << describe(*name.result);
+  EXPECT_EQ(std::string(name.result->data.begin(), name.result->data.end()), "hello world!");
+  EXPECT_EQ(net.clock.now(), start + 300ms) << "one timeout, no more";
+  const auto reqs = net.requests();
+  ASSERT_GE(reqs.size(), 3U);
+  EXPECT_EQ(reqs[0], "A4 01 20 00 7F 40 00 00");
+  EXPECT_EQ(net.responses().front(), "80 00 10 00 01 00 04 05") << "the refusal names 1000h";
+  EXPECT_EQ(reqs[1], "80 01 20 00 00 00 04 05") << "abort (timeout) before starting over";
+  EXPECT_EQ(reqs[2], "40 01 20 00 00 00 00 00");
+  EXPECT_FALSE(net.client->block_allowed(kNode, net.clock.now()));
+
+  // Learnt: the next string read costs no timeout.
+  net.log.clear();
+  const TimePoint second = net.clock.now();
+  s.on_done = again.handler();
+  ASSERT_TRUE(net.client->upload(s, second));
+  ASSERT_TRUE(net.run([&] { return again.done(); }));
+  ASSERT_TRUE(again.result->ok());
+  EXPECT_EQ(net.clock.now(), second);
+  EXPECT_EQ(net.requests().front(), "40 01 20 00 00 00 00 00");
+}
+
 // ---- lost and duplicated frames ------------------------------------------------------------------------
 
 TEST(SdoFaults, BlockDownloadRecoversFromALostSegment) {
@@ -803,6 +1003,24 @@ TEST(SdoClient, FramesOfOtherNodesDoNotDisturb) {
   ASSERT_TRUE(net.run([&] { return out.done(); }));
   ASSERT_TRUE(out.result->ok());
   EXPECT_EQ(out.result->data, (Bytes{1, 2, 3, 4}));
+}
+
+// A stray abort does not advance the transfer, so it does not restart its timeout.
+TEST(SdoClient, StrayAbortDoesNotRestartTheTimeout) {
+  ClientConfig cfg;
+  cfg.default_timeout = 500ms;
+  ScriptedNetwork net(nullptr, cfg);
+  Outcome out;
+  Request r = request(0x1000, 0, Mode::Segmented);
+  r.on_done = out.handler();
+  const TimePoint start = net.clock.now();
+  ASSERT_TRUE(net.client->upload(r, start));
+  EXPECT_TRUE(net.client->on_frame(response("80 01 10 00 00 00 02 06"), start + 400ms));
+  EXPECT_FALSE(out.done());
+  EXPECT_EQ(net.client->next_deadline(), start + 500ms);
+  net.client->on_time(start + 500ms);
+  ASSERT_TRUE(out.done());
+  EXPECT_EQ(out.result->error, SdoAbort::Timeout) << "not the stray abort's 06020000h";
 }
 
 // ---- queueing ------------------------------------------------------------------------------------------------

@@ -11,19 +11,30 @@
 //
 // Modes (Mode):
 //   - Auto, download: expedited for 1..4 bytes; block for more than
-//     block_threshold bytes unless the node refused a block initiate before;
-//     segmented otherwise (including 0 bytes).
-//   - Auto, upload: the size is unknown in advance, so a block upload
-//     initiate goes out with the protocol switch threshold pst =
-//     min(block_threshold, 255): the server answers objects up to pst bytes
-//     with a normal (expedited/segmented) upload (7.2.4.3.13). A normal
-//     initiate goes out instead when the node refused a block initiate
-//     before, or when Request::expected_size is at most block_threshold.
+//     block_threshold bytes unless the node refused a block initiate
+//     recently (see below); segmented otherwise (including 0 bytes).
+//   - Auto, upload: when Request::expected_size is at most block_threshold,
+//     a normal (expedited/segmented) initiate goes out. Callers that know
+//     the object's size (fixed-size data types from the EDS) MUST pass it:
+//     a device without block transfer then costs nothing extra on ordinary
+//     reads. Otherwise (large or unknown size) a block upload initiate goes
+//     out with the protocol switch threshold pst = min(block_threshold,
+//     255): the server answers objects up to pst bytes with a normal upload
+//     (7.2.4.3.13). A normal initiate goes out too while the node counts as
+//     refusing block transfer.
 //   - Auto, fallback: a server answering a block initiate with abort
-//     05040001h is remembered as not supporting block transfer, and the
-//     request is restarted at once with a normal initiate. (A server that
-//     stays silent instead gets a timeout.) forget_block_support() clears
-//     what was learned, e.g. after the node rebooted with new firmware.
+//     05040001h for the very index/sub-index of the request refuses block
+//     transfer: the request is restarted at once with a normal initiate, and
+//     the node's Auto transfers go the normal way for
+//     ClientConfig::block_retry_interval, then block is tried again (the
+//     node may have been replaced or updated meanwhile). Some servers
+//     (CANopenNode built without block support) send that refusal with the
+//     index/sub-index of their previous transfer instead; such an abort is
+//     stray (below), but when the server then stays silent until the
+//     timeout, the silence confirms the refusal: the node is treated as
+//     refusing, and the request restarts with a normal initiate instead of
+//     failing. (A server that stays silent without any refusal gets a
+//     timeout.) forget_block_support() clears what was learned at once.
 //   - Expedited / Segmented download: forced; Expedited needs 1..4 bytes.
 //   - Expedited / Segmented upload: the client sends the normal initiate;
 //     the server chooses expedited or segmented, and both are accepted.
@@ -39,6 +50,12 @@
 // with 05040003h/05040002h, CRC mismatch with 05040004h. An abort frame
 // from the server completes the request with its code, origin Remote (code
 // 0, which is no abort code, as 08000000h).
+//
+// Stray aborts: an abort frame whose index/sub-index is not the transfer's
+// (7.2.4.3.17: m is the multiplexer of the aborted transfer) does not end
+// the transfer, does not restart its timeout and does not count as a
+// refusal of block transfer; it is only counted (stray_aborts()). Devices
+// send them, e.g. late for a transfer the client already gave up on.
 //
 // Duplicates (a frame repeated on the bus): a response byte-identical to the
 // previous one of the transfer is ignored, except where equal consecutive
@@ -151,6 +168,10 @@ struct ClientConfig {
   // Progress is reported when at least this many more bytes are done, and
   // at the end of the data phase.
   std::size_t progress_step = 4096;
+  // After a node refused a block initiate, Auto transfers to it use normal
+  // transfers for this long, then try block again. Zero: try block every
+  // time (each refusal costs a round trip, or a timeout, see Auto fallback).
+  Duration block_retry_interval = std::chrono::minutes(10);
 };
 
 class SdoClient {
@@ -168,7 +189,8 @@ class SdoClient {
   // false when the id is unknown or already completed.
   bool cancel(RequestId id, TimePoint now);
 
-  // Returns true when the frame belonged to a transfer in progress.
+  // Returns true when the frame was a response of a node with a transfer in
+  // progress (a stray abort included).
   bool on_frame(const can::Frame& frame, TimePoint now);
   // Earliest deadline of the running transfers; TimePoint::max() when none.
   TimePoint next_deadline() const;
@@ -180,10 +202,16 @@ class SdoClient {
   void set_node_timeout(std::uint8_t node, Duration timeout);
   void set_node_cob_ids(std::uint8_t node, std::uint32_t request_id, std::uint32_t response_id);
   void forget_block_support(std::uint8_t node);
+  // Whether Auto transfers to the node would start with a block initiate at
+  // `now` (false while it counts as refusing block transfer).
+  bool block_allowed(std::uint8_t node, TimePoint now) const;
 
   // Requests of the node: waiting plus running.
   std::size_t pending(std::uint8_t node) const;
   bool busy(std::uint8_t node) const;
+  // Abort frames ignored because their index/sub-index was not the
+  // transfer's, all nodes, since construction.
+  std::uint64_t stray_aborts() const { return stray_aborts_; }
 
  private:
   // The protocol step a running transfer waits in.
@@ -200,9 +228,6 @@ class SdoClient {
     BlockUploadSubBlock,    // sent start or ack, receives segments
     BlockUploadEnd,         // acknowledged the last segment, expects the end
   };
-  // Whether a node answered a block initiate with 05040001h.
-  enum class BlockSupport : std::uint8_t { Unknown, Unsupported };
-
   struct Job {
     RequestId id = 0;
     bool upload = false;
@@ -229,12 +254,15 @@ class SdoClient {
                            // block upload: last seqno received in order
     std::optional<BlockAck> last_ack;    // block upload: the previous ack sent
     std::optional<Payload> ack_trigger;  // block upload: the segment that caused it
+    // Block initiate unanswered: a stray 05040001h came meanwhile (the
+    // multiplexer it carried), possibly a refusal with a stale multiplexer.
+    std::optional<Multiplexer> stray_refusal;
   };
   struct Node {
     std::uint32_t request_id = 0;
     std::uint32_t response_id = 0;
     std::optional<Duration> timeout;
-    BlockSupport block = BlockSupport::Unknown;
+    TimePoint no_block_until{};  // refused a block initiate: Auto stays normal until then
     std::deque<Job> queue;
     std::optional<Transfer> active;
   };
@@ -242,7 +270,10 @@ class SdoClient {
   Result<RequestId> submit(Job job, TimePoint now);
   void pump(std::uint8_t node, TimePoint now);
   void start(std::uint8_t node, Job job, TimePoint now);
-  void send_initiate(std::uint8_t node, Transfer& t);
+  void send_initiate(std::uint8_t node, Transfer& t, TimePoint now);
+  void refuse_block(std::uint8_t node, TimePoint now);
+  bool is_abort(const Transfer& t, PayloadView p) const;
+  void stray_abort(Transfer& t, PayloadView p);
   void send(const Node& n, const Payload& p);
   void complete(std::uint8_t node, std::error_code ec, Origin origin, std::string detail, TimePoint now,
                 bool cancelled = false);
@@ -271,6 +302,7 @@ class SdoClient {
   std::array<Node, 128> nodes_;       // index = node-ID; [0] unused
   std::vector<std::uint8_t> running_; // nodes with an active transfer
   RequestId next_id_ = 1;
+  std::uint64_t stray_aborts_ = 0;
 };
 
 }  // namespace canopen::sdo
