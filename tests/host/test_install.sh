@@ -12,7 +12,7 @@ trap cleanup EXIT
 fail() { echo "FAIL: $*"; [ -f "$P/gw.log" ] && tail -20 "$P/gw.log"; exit 1; }
 
 cmake --install "$BUILD_DIR" --prefix "$P/usr" > "$P/install.log" 2>&1 || fail "install: $(tail -5 "$P/install.log")"
-for f in bin/canopen-gateway bin/canopen-sim share/canopen-gateway/web/index.html \
+for f in bin/canopen-gateway bin/canopen-sim bin/canopen-eds share/canopen-gateway/web/index.html \
          share/canopen-gateway/gateway.example.yaml share/canopen-gateway/eds/cia402-drive.eds \
          lib/systemd/system/canopen-gateway.service; do
   [ -e "$P/usr/$f" ] || fail "not installed: $f"
@@ -20,6 +20,9 @@ done
 grep -q "^ExecStart=$P/usr/bin/canopen-gateway " "$P/usr/lib/systemd/system/canopen-gateway.service" ||
   fail "unit's ExecStart does not point at the installed binary"
 echo "PASS: installed files"
+# The installed checker accepts the installed example EDS files.
+"$P/usr/bin/canopen-eds" check "$P/usr/share/canopen-gateway/eds/"*.eds > "$P/check.log" 2>&1 ||
+  fail "installed canopen-eds refused the installed EDS files: $(cat "$P/check.log")"
 
 # The installed dashboard is served, not the source one: mark the copy.
 echo "<!-- installed copy -->" >> "$P/usr/share/canopen-gateway/web/index.html"
