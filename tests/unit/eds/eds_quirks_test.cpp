@@ -140,8 +140,8 @@ TEST(EdsQuirk, InlineCommentsHashLinesAndBlankLines) {
 
 TEST(EdsQuirk, DomainDefaultsRealBitPatternsAndCSuffixes) {
   const auto q = load_quirk("odd-values.eds");
-  for (const std::uint16_t index : {std::uint16_t{0x2000}, std::uint16_t{0x2001}, std::uint16_t{0x2002}, std::uint16_t{0x2003}}) {
-    EXPECT_EQ(at(q, index, 0).value, Value::zero(DataType::Domain)) << std::hex << index;
+  for (const int index : {0x2000, 0x2001, 0x2002, 0x2003}) {
+    EXPECT_EQ(at(q, static_cast<std::uint16_t>(index), 0).value, Value::zero(DataType::Domain)) << std::hex << index;
   }
   expect_warning(q, "DefaultValue=0", "DefaultValue '0' is not hex data; the DOMAIN starts empty", "[2001]");
   expect_warning(q, "DefaultValue=@ABCD", "DefaultValue '@ABCD' is not hex data");
@@ -252,7 +252,9 @@ TEST(EdsQuirk, ObjectsThatCannotBeReadAreLeftOut) {
   expect_warning(q, "ObjectType=0x3", "unknown ObjectType 0x3 in [2003]");
   expect_warning(q, "[2004]", "ARRAY object [2004] has no sub-objects");
   expect_warning(q, "ObjectType=0x08", "sub-object [2005sub1] has ObjectType 0x08; a sub-object is a VAR");
-  for (const std::uint16_t gone : {std::uint16_t{0x2001}, std::uint16_t{0x2002}, std::uint16_t{0x2003}, std::uint16_t{0x2004}}) EXPECT_EQ(q.d.od.find(gone), nullptr) << std::hex << gone;
+  for (const int gone : {0x2001, 0x2002, 0x2003, 0x2004}) {
+    EXPECT_EQ(q.d.od.find(static_cast<std::uint16_t>(gone)), nullptr) << std::hex << gone;
+  }
   EXPECT_NE(q.d.od.find(0x2000, 0), nullptr);
   EXPECT_EQ(at(q, 0x2005, 1).type, DataType::Unsigned32);
 }
