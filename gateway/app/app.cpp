@@ -154,8 +154,10 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   canopen::od::GatewayIdentity identity;
   identity.software_version = CANOPEN_GATEWAY_VERSION;
   canopen::od::GatewayDictionaryOptions od_options;
+  // heartbeat-consumer-ms with a time: a 1016h entry (auto and 0 have none).
+  auto consumed = [](const NodeConfig& c) { return c.heartbeat_consumer && c.heartbeat_consumer->count() > 0; };
   std::size_t consumers = 0;
-  for (const auto& node : n.cfg.nodes) consumers += node.heartbeat_consumer.count() > 0 ? 1 : 0;
+  for (const auto& node : n.cfg.nodes) consumers += consumed(node) ? 1 : 0;
   od_options.heartbeat_consumers = static_cast<std::uint8_t>(std::clamp<std::size_t>(consumers, 8, 127));
   n.own_od.emplace(canopen::od::make_gateway_dictionary(cfg.node_id, identity, od_options));
   auto& od = *n.own_od;
@@ -169,10 +171,10 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
       "heartbeat-ms");
   std::uint8_t slot = 1;
   for (const auto& node : n.cfg.nodes) {
-    if (node.heartbeat_consumer.count() == 0) continue;
+    if (!consumed(node)) continue;
     set(0x1016, slot++,
         Value::of_unsigned(DataType::Unsigned32, std::uint64_t{node.id} << 16 |
-                                                     static_cast<std::uint64_t>(node.heartbeat_consumer.count())),
+                                                     static_cast<std::uint64_t>(node.heartbeat_consumer->count())),
         "heartbeat-consumer-ms");
   }
   if (cfg.sync.window.count() > 0)
@@ -227,6 +229,15 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
     if (it != n.descriptions.end()) {
       for (const auto& problem : n.network->add_node(node.id, it->second.od))
         log_.warn(n.label + " node " + std::to_string(node.id) + " PDO: " + problem);
+    }
+    // heartbeat-consumer-ms auto: watched with the node's own 1017h (or a
+    // period learnt from its heartbeats); 0: not watched at all.
+    if (!node.heartbeat_consumer) {
+      n.network->nmt().set_auto_watch(
+          node.id, true,
+          it != n.descriptions.end() ? canopen::nmt::producer_heartbeat_time(it->second.od) : canopen::Duration::zero());
+    } else if (node.heartbeat_consumer->count() == 0) {
+      n.network->nmt().set_auto_watch(node.id, false);
     }
     if (node.guarding.guard_time.count() > 0) {
       n.network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor,
