@@ -388,6 +388,15 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
 void App::start() {
   if (config_.mqtt.enabled) start_mqtt();
   for (auto& n : nets_) {
+    // The state the channel was opened in: the channel reported it before
+    // anyone listened, and the retained bus topic and the state cache (REST,
+    // the dashboard's first paint) need it without waiting for a change.
+    canopen::can::BusEvent opened;
+    opened.state = n->channel->state();
+    opened.previous = canopen::can::BusState::Down;
+    opened.cause = opened.state == canopen::can::BusState::Down ? canopen::can::BusEventCause::LinkDown
+                                                                 : canopen::can::BusEventCause::LinkUp;
+    n->network->report(opened);
     n->own->start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
     n->driver->poke();
     if (n->simulator) n->simulator->start();

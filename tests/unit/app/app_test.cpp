@@ -170,6 +170,37 @@ TEST(AppDemo, TheGatewaysOwnNodeAnswersFromItsDictionary) {
   EXPECT_THAT(missing.body, HasSubstr("0x06020000"));
 }
 
+// The retained bus topic (api-contract "MQTT topics") carries the state the
+// interface is in from the start, not only after a change.
+TEST(AppDemo, BusStateIsPublishedAtStartRetainedWithoutAChange) {
+  DemoRig rig;  // the consumer was added before start()
+  EncodedEventPtr bus;
+  for (const auto& ev : rig.events)
+    if (ev->kind == EventKind::Bus && bus == nullptr) bus = ev;
+  ASSERT_NE(bus, nullptr) << "no bus event at start";
+  EXPECT_EQ(bus->topic, "canopen/test/1/bus");
+  EXPECT_TRUE(bus->retained);
+  const auto json = boost::json::parse(bus->json).as_object();
+  EXPECT_EQ(json.at("state").as_string(), "error-active");
+  EXPECT_EQ(json.at("previous").as_string(), "down");
+  EXPECT_EQ(json.at("cause").as_string(), "link-up");
+  EXPECT_EQ(json.at("tec").to_number<int>(), 0);
+  EXPECT_EQ(json.at("rec").to_number<int>(), 0);
+  // REST GET /networks/{net} and the dashboard read the state cache.
+  const auto* net = rig.app->cache().network(1);
+  ASSERT_TRUE(net->last_bus_event);
+  EXPECT_EQ(net->last_bus_event->state, canopen::can::BusState::ErrorActive);
+  // And on every change.
+  const auto before = rig.events.size();
+  ASSERT_TRUE(rig.app->set_simulated_link(1, false));
+  EXPECT_TRUE(rig.run_until([&] {
+    for (std::size_t i = before; i < rig.events.size(); ++i)
+      if (rig.events[i]->kind == EventKind::Bus && rig.events[i]->json.find(R"("state":"down")") != std::string::npos)
+        return true;
+    return false;
+  }, 2s));
+}
+
 TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 10); }));
