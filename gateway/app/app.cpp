@@ -153,7 +153,18 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   // The gateway's own node: its dictionary says what it produces.
   canopen::od::GatewayIdentity identity;
   identity.software_version = CANOPEN_GATEWAY_VERSION;
+  auto* np = &n;
   canopen::od::GatewayDictionaryOptions od_options;
+  // 1010h "save" / 1011h "load" (7.5.2.13/14): the power-on values a reset of
+  // the own node returns to, for the life of the process (a restart is a
+  // power-on: the configuration gives the values again).
+  od_options.on_store = [np](std::uint8_t sub) {
+    return np->own ? np->own->store_parameters(sub) : make_error_code(canopen::SdoAbort::CannotStoreDeviceState);
+  };
+  od_options.on_restore = [np](std::uint8_t sub) {
+    return np->own ? np->own->restore_default_parameters(sub)
+                   : make_error_code(canopen::SdoAbort::CannotStoreDeviceState);
+  };
   // heartbeat-consumer-ms with a time: a 1016h entry (auto and 0 have none).
   auto consumed = [](const NodeConfig& c) { return c.heartbeat_consumer && c.heartbeat_consumer->count() > 0; };
   std::size_t consumers = 0;
@@ -192,7 +203,6 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   // One sink per side. What one side broadcasts, the other sees locally:
   // NMT commands of the master reach the own node (node 0 or its ID), SYNC
   // and TIME of the own node reach the master side (synchronous RPDO data).
-  auto* np = &n;
   // The own node's EMCYs go to the master side too, so they are published
   // like any node's.
   const std::uint32_t own_emcy = 0x80U + cfg.node_id;
@@ -315,6 +325,12 @@ const canopen::eds::DeviceDescription* App::description(std::uint32_t net_number
 }
 
 std::string_view App::version() { return CANOPEN_GATEWAY_VERSION; }
+
+const canopen::od::ObjectDictionary* App::own_dictionary(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return nullptr;
+  const auto& od = nets_[net_number - 1]->own_od;
+  return od ? &*od : nullptr;
+}
 
 std::optional<canopen::can::BusState> App::bus_state(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return std::nullopt;

@@ -201,6 +201,38 @@ TEST(AppDemo, BusStateIsPublishedAtStartRetainedWithoutAChange) {
   }, 2s));
 }
 
+// 7.3.2.2.1: an NMT reset communication of the gateway's own node undoes a
+// 1017h written since start; the REST view shows the value in force.
+TEST(AppDemo, ResetCommunicationOfTheOwnNodeRestoresItsHeartbeatTime) {
+  DemoRig rig;
+  auto hb = [&] {
+    const auto r = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1017", "subIndex": 0})");
+    return boost::json::parse(r.body).as_object().at("value").to_number<int>();
+  };
+  ASSERT_EQ(hb(), 1000) << "heartbeat-ms default";
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  ASSERT_EQ(hb(), 250);
+  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
+  // Saved with 1010h sub 2 ("save", 7.5.2.13) it survives the reset, until
+  // 1011h sub 2 ("load", 7.5.2.14) and the next reset.
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1010", "subIndex": 2, "value": 1702257011})").status,
+            200);
+  // Written after the save: the reset undoes it (so it did happen).
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x100C", "subIndex": 0, "value": 5})").status, 200);
+  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] {
+    const auto r = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x100C", "subIndex": 0})");
+    return boost::json::parse(r.body).as_object().at("value").to_number<int>() == 0;
+  }, 2s));
+  EXPECT_EQ(hb(), 250);
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1011", "subIndex": 2, "value": 1684107116})").status,
+            200);
+  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
+}
+
 TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 10); }));
