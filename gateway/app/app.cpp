@@ -158,9 +158,22 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   // The gateway's own node: its dictionary says what it produces.
   canopen::od::GatewayIdentity identity;
   identity.software_version = CANOPEN_GATEWAY_VERSION;
+  auto* np = &n;
   canopen::od::GatewayDictionaryOptions od_options;
+  // 1010h "save" / 1011h "load" (7.5.2.13/14): the power-on values a reset of
+  // the own node returns to, for the life of the process (a restart is a
+  // power-on: the configuration gives the values again).
+  od_options.on_store = [np](std::uint8_t sub) {
+    return np->own ? np->own->store_parameters(sub) : make_error_code(canopen::SdoAbort::CannotStoreDeviceState);
+  };
+  od_options.on_restore = [np](std::uint8_t sub) {
+    return np->own ? np->own->restore_default_parameters(sub)
+                   : make_error_code(canopen::SdoAbort::CannotStoreDeviceState);
+  };
+  // heartbeat-consumer-ms with a time: a 1016h entry (auto and 0 have none).
+  auto consumed = [](const NodeConfig& c) { return c.heartbeat_consumer && c.heartbeat_consumer->count() > 0; };
   std::size_t consumers = 0;
-  for (const auto& node : n.cfg.nodes) consumers += node.heartbeat_consumer.count() > 0 ? 1 : 0;
+  for (const auto& node : n.cfg.nodes) consumers += consumed(node) ? 1 : 0;
   od_options.heartbeat_consumers = static_cast<std::uint8_t>(std::clamp<std::size_t>(consumers, 8, 127));
   n.own_od.emplace(canopen::od::make_gateway_dictionary(cfg.node_id, identity, od_options));
   auto& od = *n.own_od;
@@ -174,10 +187,10 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
       "heartbeat-ms");
   std::uint8_t slot = 1;
   for (const auto& node : n.cfg.nodes) {
-    if (node.heartbeat_consumer.count() == 0) continue;
+    if (!consumed(node)) continue;
     set(0x1016, slot++,
         Value::of_unsigned(DataType::Unsigned32, std::uint64_t{node.id} << 16 |
-                                                     static_cast<std::uint64_t>(node.heartbeat_consumer.count())),
+                                                     static_cast<std::uint64_t>(node.heartbeat_consumer->count())),
         "heartbeat-consumer-ms");
   }
   if (cfg.sync.window.count() > 0)
@@ -195,7 +208,6 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   // One sink per side. What one side broadcasts, the other sees locally:
   // NMT commands of the master reach the own node (node 0 or its ID), SYNC
   // and TIME of the own node reach the master side (synchronous RPDO data).
-  auto* np = &n;
   // The own node's EMCYs go to the master side too, so they are published
   // like any node's.
   const std::uint32_t own_emcy = 0x80U + cfg.node_id;
@@ -232,6 +244,15 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
     if (it != n.descriptions.end()) {
       for (const auto& problem : n.network->add_node(node.id, it->second.od))
         log_.warn(n.label + " node " + std::to_string(node.id) + " PDO: " + problem);
+    }
+    // heartbeat-consumer-ms auto: watched with the node's own 1017h (or a
+    // period learnt from its heartbeats); 0: not watched at all.
+    if (!node.heartbeat_consumer) {
+      n.network->nmt().set_auto_watch(
+          node.id, true,
+          it != n.descriptions.end() ? canopen::nmt::producer_heartbeat_time(it->second.od) : canopen::Duration::zero());
+    } else if (node.heartbeat_consumer->count() == 0) {
+      n.network->nmt().set_auto_watch(node.id, false);
     }
     if (node.guarding.guard_time.count() > 0) {
       n.network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor,
@@ -310,6 +331,12 @@ const canopen::eds::DeviceDescription* App::description(std::uint32_t net_number
 
 std::string_view App::version() { return CANOPEN_GATEWAY_VERSION; }
 
+const canopen::od::ObjectDictionary* App::own_dictionary(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return nullptr;
+  const auto& od = nets_[net_number - 1]->own_od;
+  return od ? &*od : nullptr;
+}
+
 std::optional<canopen::can::BusState> App::bus_state(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
   return nets_[net_number - 1]->channel->state();
@@ -387,6 +414,15 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
 void App::start() {
   if (config_.mqtt.enabled) start_mqtt();
   for (auto& n : nets_) {
+    // The state the channel was opened in: the channel reported it before
+    // anyone listened, and the retained bus topic and the state cache (REST,
+    // the dashboard's first paint) need it without waiting for a change.
+    canopen::can::BusEvent opened;
+    opened.state = n->channel->state();
+    opened.previous = canopen::can::BusState::Down;
+    opened.cause = opened.state == canopen::can::BusState::Down ? canopen::can::BusEventCause::LinkDown
+                                                                 : canopen::can::BusEventCause::LinkUp;
+    n->network->report(opened);
     n->own->start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
     n->driver->poke();
     if (n->simulator) n->simulator->start();

@@ -40,6 +40,10 @@ namespace canopen::eds {
 struct DeviceDescription;
 }
 
+namespace canopen::od {
+class ObjectDictionary;
+}
+
 namespace canopen::socketcan {
 class LinkMonitor;
 }
@@ -96,6 +100,10 @@ class App {
   // The gateway's version (CANOPEN_GATEWAY_VERSION).
   static std::string_view version();
 
+  // The gateway's own dictionary on network `net` (its communication
+  // parameters as they are now: SDO writes and NMT resets change them);
+  // nullptr for an unknown network.
+  const canopen::od::ObjectDictionary* own_dictionary(std::uint32_t net) const;
   // The bus state of network `net` as its channel reports it now; nullopt
   // for an unknown network.
   std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const;

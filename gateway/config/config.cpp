@@ -139,7 +139,16 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
     std::error_code ec;
     if (!fs::is_regular_file(n.eds, ec)) f.fail("file '" + n.eds + "' not found");
   }
-  if (auto v = a.get("heartbeat-consumer-ms")) n.heartbeat_consumer = ms(*v);
+  if (auto v = a.get("heartbeat-consumer-ms")) {
+    const auto s = v->str();
+    if (s == "auto") {
+      n.heartbeat_consumer.reset();
+    } else if (!s.empty() && s[0] >= '0' && s[0] <= '9') {
+      n.heartbeat_consumer = ms(*v);
+    } else {
+      v->fail("'" + s + "' is not auto, 0 (not watched) or a consumer time in ms (1..65535)");
+    }
+  }
   if (auto g = a.get("guarding")) {
     g->expect_map({"guard-time-ms", "life-time-factor"});
     if (auto v = g->get("guard-time-ms")) n.guarding.guard_time = ms(*v);

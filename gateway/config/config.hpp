@@ -43,7 +43,11 @@ struct NodeConfig {
   std::uint8_t id = 0;
   std::string name;     // optional; shown in the API and dashboard
   std::string eds;      // EDS or DCF file ("" = none: values arrive raw)
-  std::chrono::milliseconds heartbeat_consumer{0};  // 0 = not consumed
+  // heartbeat-consumer-ms. nullopt ("auto", the default): watched anyway,
+  // lost after 3 x P without a heartbeat, P the node's 1017h from its
+  // EDS/DCF or else learnt from its heartbeats. 0: not watched. Otherwise
+  // the gateway's 1016h consumer time for the node.
+  std::optional<std::chrono::milliseconds> heartbeat_consumer;
   GuardingConfig guarding;
   std::optional<BootConfig> boot;  // nullopt: only watch the node
 };

@@ -199,17 +199,24 @@ void get_network(App& app, const Request& req, Responder respond) {
     }
   }
   o["counters"] = std::move(counters);
+  // The own node's parameters as they are now (an SDO write or an NMT reset
+  // of the gateway's node may have changed them since the configuration).
+  const auto* own = app.own_dictionary(net);
+  auto param = [own](std::uint16_t index, std::uint64_t fallback) {
+    return own != nullptr ? own->get_unsigned(index, 0).value_or(fallback) : fallback;
+  };
+  constexpr std::uint64_t kProduce = 0x40000000;  // bit 30 of 1005h / 1012h
   json::object sync;
-  sync["producer"] = cfg.sync.period.count() > 0;
-  sync["periodUs"] = cfg.sync.period.count();
-  sync["windowUs"] = cfg.sync.window.count();
-  sync["counterOverflow"] = cfg.sync.counter_overflow;
+  sync["producer"] = (param(0x1005, 0) & kProduce) != 0 && param(0x1006, 0) != 0;
+  sync["periodUs"] = param(0x1006, 0);
+  sync["windowUs"] = param(0x1007, 0);
+  sync["counterOverflow"] = param(0x1019, 0);
   o["sync"] = std::move(sync);
   json::object time;
-  time["producer"] = cfg.time.produce;
+  time["producer"] = (param(0x1012, 0) & kProduce) != 0;
   time["periodMs"] = cfg.time.period.count();
   o["time"] = std::move(time);
-  o["heartbeatMs"] = cfg.heartbeat_producer.count();
+  o["heartbeatMs"] = param(0x1017, 0);
   respond(json_response(o));
 }
 

@@ -7,9 +7,14 @@ namespace canopen::sim {
 AsioMemoryChannel::AsioMemoryChannel(AsioMemoryBus& owner, std::unique_ptr<can::MemoryEndpoint> ep)
     : owner_(owner), ep_(std::move(ep)) {
   ep_->on_frames([this](std::span<const can::Frame> frames) { deliver(frames); });
+  // Link changes (set_link_up) are bus events, as on a SocketCAN channel.
+  ep_->on_bus_event([this](const can::BusEvent& ev) { report(ev); });
 }
 
-AsioMemoryChannel::~AsioMemoryChannel() { ep_->on_frames(nullptr); }
+AsioMemoryChannel::~AsioMemoryChannel() {
+  ep_->on_frames(nullptr);
+  ep_->on_bus_event(nullptr);
+}
 
 can::SendStatus AsioMemoryChannel::send(const can::Frame& frame) {
   const auto status = ep_->send(frame);

@@ -43,6 +43,17 @@
 //     reset communication); PDOs that cannot be used are listed in
 //     pdo_errors() and stay off. Writes to 1005h/1006h/1019h reconfigure
 //     the SYNC producer.
+//   - Power-on values (7.3.2.2.1): the first start() takes the values of
+//     every writable entry of 1000h-9FFFh as the power-on values (not
+//     1003h, 1010h, 1011h: history and commands, not parameters). Reset
+//     communication sets 1000h-1FFFh back to them, reset node also
+//     2000h-9FFFh, before the reset callbacks run; so a 1017h written since
+//     is undone and the heartbeat producer, SYNC producer and PDOs follow.
+//     store_parameters() (1010h "save") makes the current values the
+//     power-on values, restore_default_parameters() (1011h "load") makes
+//     the values of the first start() the power-on values again; both
+//     take effect at the next reset (7.5.2.13, 7.5.2.14). Nothing is kept
+//     beyond the Device's life: a new Device is a power-on.
 //
 // Thread safety: none; use from one thread. Callbacks run synchronously
 // inside the Device's methods and must not call back into the Device except
@@ -52,11 +63,13 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 #include "canopen/can/frame.hpp"
@@ -94,8 +107,8 @@ struct DeviceCallbacks {
   // Every NMT node control command addressed to this node (or all nodes),
   // before it is executed.
   std::function<void(NmtCommand)> on_nmt_command = nullptr;
-  // Reset sub-states (nmt/slave.hpp): restore application / communication
-  // parameters in the dictionary here.
+  // Reset sub-states (nmt/slave.hpp), after the Device has set the area to
+  // its power-on values: restore anything else the application keeps.
   std::function<void()> on_reset_application = nullptr;
   std::function<void()> on_reset_communication = nullptr;
   // An RPDO was written into the dictionary: its number and the values (the
@@ -139,6 +152,12 @@ class Device {
   // Rebuilds all PDOs from the dictionary (done automatically on writes to
   // 1400h-1BFFh and on reset communication).
   void reconfigure_pdos(TimePoint now);
+  // Parameter groups as the sub-indexes of 1010h/1011h: 1 all, 2
+  // communication (1000h-1FFFh), 3 application (2000h-9FFFh). A 1010h/1011h
+  // write hook may call them (they do not touch the dictionary).
+  // NoSuchSubIndex for another group, CannotStoreDeviceState before start().
+  std::error_code store_parameters(std::uint8_t group);
+  std::error_code restore_default_parameters(std::uint8_t group);
 
   NmtState state() const { return slave_.nmt_state(); }
   std::uint8_t node_id() const { return cfg_.node_id; }
@@ -172,8 +191,11 @@ class Device {
   struct Token {
     Device* device;
   };
+  using Parameters = std::map<std::pair<std::uint16_t, std::uint8_t>, Value>;
 
   void install_observers();
+  Parameters parameters(std::uint16_t first, std::uint16_t last) const;
+  void restore_power_on(std::uint16_t first, std::uint16_t last);
   void observed(std::uint16_t index, std::uint8_t sub);
   void settle(TimePoint now);
   void rebuild_pdos(TimePoint now);
@@ -205,6 +227,11 @@ class Device {
   std::vector<Tpdo> tpdos_;
   std::vector<Rpdo> rpdos_;
   std::vector<std::string> pdo_errors_;
+  // 7.3.2.2.1: what reset communication / reset node set the areas to, and
+  // the values of the first start() (1011h "load" brings them back).
+  Parameters power_on_;
+  Parameters defaults_;
+  bool started_ = false;
   // Writes of mapped objects seen by the observers, run at settle().
   std::vector<std::pair<std::uint16_t, std::uint8_t>> changed_;
   bool pdo_dirty_ = false;

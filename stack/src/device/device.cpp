@@ -16,6 +16,28 @@ using nmt::Service;
 bool is_pdo_parameter(std::uint16_t index) { return index >= 0x1400 && index <= 0x1BFF; }
 bool is_sync_parameter(std::uint16_t index) { return index == 0x1005 || index == 0x1006 || index == 0x1019; }
 
+// Areas of 7.3.2.2.1: reset communication restores the communication area,
+// reset application the manufacturer-specific and standardized profile areas.
+constexpr std::uint16_t kCommunicationFirst = 0x1000, kCommunicationLast = 0x1FFF;
+constexpr std::uint16_t kApplicationFirst = 0x2000, kApplicationLast = 0x9FFF;
+
+// Parameters are what a client may write; 1003h sub 0 (clears the history)
+// and 1010h/1011h (store/restore signatures) are commands, not settings.
+bool is_parameter(std::uint16_t index, const od::SubEntry& e) {
+  if (index == 0x1003 || index == 0x1010 || index == 0x1011) return false;
+  return od::writable(e.access);
+}
+
+// The index range of a 1010h/1011h sub-index (parameter group).
+std::optional<std::pair<std::uint16_t, std::uint16_t>> group_range(std::uint8_t group) {
+  switch (group) {
+    case 1: return std::pair{kCommunicationFirst, kApplicationLast};
+    case 2: return std::pair{kCommunicationFirst, kCommunicationLast};
+    case 3: return std::pair{kApplicationFirst, kApplicationLast};
+    default: return std::nullopt;
+  }
+}
+
 sdo::ServerConfig server_config(const DeviceConfig& c) {
   sdo::ServerConfig s = c.sdo;
   s.node_id = c.node_id;
@@ -33,10 +55,13 @@ Device::Device(od::ObjectDictionary& dictionary, DeviceConfig config, FrameSink 
       slave_(od_, cfg_.node_id, [this](const can::Frame& f) { sink_(f); },
              nmt::SlaveCallbacks{
                  [this] {
+                   restore_power_on(kApplicationFirst, kApplicationLast);
                    if (cb_.on_reset_application) cb_.on_reset_application();
                  },
                  [this] {
                    sdo_.abort(make_error_code(SdoAbort::GeneralError));
+                   // The slave re-reads 1017h/100Ch/100Dh after this.
+                   restore_power_on(kCommunicationFirst, kCommunicationLast);
                    if (cb_.on_reset_communication) cb_.on_reset_communication();
                    // Communication parameters may have been restored: rebuild.
                    pdo_dirty_ = true;
@@ -100,6 +125,13 @@ void Device::observed(std::uint16_t index, std::uint8_t sub) {
 void Device::start(TimePoint now) {
   now_ = now;
   in_call_ = true;
+  if (!started_) {
+    // Power-on: what the application put in the dictionary before start()
+    // is the configuration a reset returns to.
+    defaults_ = parameters(kCommunicationFirst, kApplicationLast);
+    power_on_ = defaults_;
+    started_ = true;
+  }
   sync_producer_.reconfigure(now);
   // Periodic TIME starts its grid at power-on (the standard sets no rate).
   time_producer_.emplace(od_, [this](const can::Frame& f) { send_if(Service::Time, f); },
@@ -216,6 +248,48 @@ void Device::reconfigure_pdos(TimePoint now) {
   now_ = now;
   rebuild_pdos(now);
   settle(now);
+}
+
+Device::Parameters Device::parameters(std::uint16_t first, std::uint16_t last) const {
+  Parameters out;
+  const auto& objects = od_.objects();
+  for (auto it = objects.lower_bound(first); it != objects.end() && it->first <= last; ++it) {
+    for (const auto& [sub, entry] : it->second.subs) {
+      if (is_parameter(it->first, entry)) out.emplace(std::pair{it->first, sub}, entry.value);
+    }
+  }
+  return out;
+}
+
+void Device::restore_power_on(std::uint16_t first, std::uint16_t last) {
+  // ObjectDictionary::set: no write hooks (a valid PDO's COB-ID may change
+  // here), observers run (PDO/SYNC rebuild, the application's own).
+  for (auto it = power_on_.lower_bound({first, 0}); it != power_on_.end() && it->first.first <= last; ++it) {
+    const auto [index, sub] = it->first;
+    const od::SubEntry* entry = od_.find(index, sub);
+    if (entry != nullptr && entry->value != it->second) (void)od_.set(index, sub, it->second);
+  }
+}
+
+std::error_code Device::store_parameters(std::uint8_t group) {
+  const auto range = group_range(group);
+  if (!range) return make_error_code(SdoAbort::NoSuchSubIndex);
+  if (!started_) return make_error_code(SdoAbort::CannotStoreDeviceState);
+  std::erase_if(power_on_, [&](const auto& kv) { return kv.first.first >= range->first && kv.first.first <= range->second; });
+  power_on_.merge(parameters(range->first, range->second));
+  return {};
+}
+
+std::error_code Device::restore_default_parameters(std::uint8_t group) {
+  const auto range = group_range(group);
+  if (!range) return make_error_code(SdoAbort::NoSuchSubIndex);
+  if (!started_) return make_error_code(SdoAbort::CannotStoreDeviceState);
+  auto in_range = [&](const auto& kv) { return kv.first.first >= range->first && kv.first.first <= range->second; };
+  std::erase_if(power_on_, in_range);
+  for (const auto& kv : defaults_) {
+    if (in_range(kv)) power_on_.insert(kv);
+  }
+  return {};
 }
 
 std::vector<std::uint16_t> Device::tpdo_numbers() const {

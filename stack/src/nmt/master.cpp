@@ -12,6 +12,10 @@ constexpr std::uint16_t kConsumerHeartbeat = 0x1016;
 bool valid_node(std::uint8_t node) { return node >= 1 && node <= kMaxNodeId; }
 }  // namespace
 
+Duration producer_heartbeat_time(const od::ObjectDictionary& description) {
+  return std::chrono::milliseconds(description.get_unsigned(0x1017, 0).value_or(0) & 0xFFFFU);
+}
+
 NmtMaster::NmtMaster(FrameSink sink, EventSink events) : sink_(std::move(sink)), events_(std::move(events)) {}
 
 bool NmtMaster::send_command(NmtCommand cs, std::uint8_t node) {
@@ -65,6 +69,7 @@ void NmtMaster::on_boot_up(std::uint8_t node, const can::Frame& f, TimePoint now
   // guarding response reports as a change.
   st.state = NmtState::Initialising;
   st.last_seen = now;
+  auto_heard(node, now, true, st.lost);
   st.lost = false;
   if (auto c = consumers_.find(node); c != consumers_.end()) c->second.deadline = now + c->second.time;
   if (auto g = guarding_.find(node); g != guarding_.end()) {
@@ -79,6 +84,7 @@ void NmtMaster::on_heartbeat(std::uint8_t node, NmtState s, const can::Frame& f,
   NodeStatus& st = nodes_[node];
   ++st.heartbeats;
   st.last_seen = now;
+  auto_heard(node, now, false, st.lost);
   if (auto c = consumers_.find(node); c != consumers_.end()) c->second.deadline = now + c->second.time;
   emit(HeartbeatEvent{node, s}, f.timestamp);
   report_state(node, s, NodeStateEvent::Cause::Heartbeat, f);
@@ -109,9 +115,57 @@ void NmtMaster::lose(std::uint8_t node) {
   emit(NodeStateEvent{node, std::nullopt, st.state, NodeStateEvent::Cause::Lost}, {});
 }
 
+Duration NmtMaster::AutoWatch::p() const {
+  if (!enabled) return Duration::zero();
+  if (period > Duration::zero()) return period;
+  Duration longest{};
+  for (std::size_t k = 0; k < count; ++k) longest = std::max(longest, intervals[k]);
+  return longest;
+}
+
+void NmtMaster::auto_heard(std::uint8_t node, TimePoint now, bool boot_up, bool was_lost) {
+  AutoWatch& w = auto_[node];
+  if (!w.enabled) return;
+  if (was_lost) {
+    // The gap was no period; the node may come back with another one.
+    w.count = w.next = 0;
+  } else if (!boot_up && w.last_heartbeat) {
+    w.intervals[w.next] = now - *w.last_heartbeat;
+    w.next = (w.next + 1) % kLearnWindow;
+    w.count = std::min(w.count + 1, kLearnWindow);
+  }
+  // After a boot-up the first heartbeat may follow at any time (7.2.8.3.2.2
+  // allows the boot-up to count as the first one): no interval from it.
+  w.last_heartbeat = boot_up ? std::nullopt : std::optional<TimePoint>(now);
+  const Duration p = w.p();
+  w.deadline = p > Duration::zero() ? now + 3 * p : TimePoint::max();
+}
+
+bool NmtMaster::set_auto_watch(std::uint8_t node, bool enabled, Duration period) {
+  if (!valid_node(node)) return false;
+  AutoWatch& w = auto_[node];
+  if (!enabled) {
+    w = AutoWatch{};
+    w.enabled = false;
+    return true;
+  }
+  w.enabled = true;
+  w.period = std::max(period, Duration::zero());
+  // From the next heartbeat on; until then the deadline in force stays.
+  return true;
+}
+
+Duration NmtMaster::auto_watch_period(std::uint8_t node) const {
+  const auto it = auto_.find(node);
+  return it == auto_.end() || has_explicit_watch(node) ? Duration::zero() : it->second.p();
+}
+
 TimePoint NmtMaster::next_deadline() const {
   TimePoint next = TimePoint::max();
   for (const auto& [node, c] : consumers_) next = std::min(next, c.deadline);
+  for (const auto& [node, w] : auto_) {
+    if (!has_explicit_watch(node)) next = std::min(next, w.deadline);
+  }
   for (const auto& [node, g] : guarding_) next = std::min({next, g.next_request, g.life_deadline});
   return next;
 }
@@ -120,6 +174,12 @@ void NmtMaster::on_time(TimePoint now) {
   for (auto& [node, c] : consumers_) {
     if (now >= c.deadline) {
       c.deadline = TimePoint::max();  // until the next heartbeat
+      lose(node);
+    }
+  }
+  for (auto& [node, w] : auto_) {
+    if (now >= w.deadline && !has_explicit_watch(node)) {
+      w.deadline = TimePoint::max();  // until the next heartbeat
       lose(node);
     }
   }

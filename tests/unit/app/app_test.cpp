@@ -213,6 +213,69 @@ TEST(AppDemo, TheGatewaysOwnNodeAnswersFromItsDictionary) {
   EXPECT_THAT(missing.body, HasSubstr("0x06020000"));
 }
 
+// The retained bus topic (api-contract "MQTT topics") carries the state the
+// interface is in from the start, not only after a change.
+TEST(AppDemo, BusStateIsPublishedAtStartRetainedWithoutAChange) {
+  DemoRig rig;  // the consumer was added before start()
+  EncodedEventPtr bus;
+  for (const auto& ev : rig.events)
+    if (ev->kind == EventKind::Bus && bus == nullptr) bus = ev;
+  ASSERT_NE(bus, nullptr) << "no bus event at start";
+  EXPECT_EQ(bus->topic, "canopen/test/1/bus");
+  EXPECT_TRUE(bus->retained);
+  const auto json = boost::json::parse(bus->json).as_object();
+  EXPECT_EQ(json.at("state").as_string(), "error-active");
+  EXPECT_EQ(json.at("previous").as_string(), "down");
+  EXPECT_EQ(json.at("cause").as_string(), "link-up");
+  EXPECT_EQ(json.at("tec").to_number<int>(), 0);
+  EXPECT_EQ(json.at("rec").to_number<int>(), 0);
+  // REST GET /networks/{net} and the dashboard read the state cache.
+  const auto* net = rig.app->cache().network(1);
+  ASSERT_TRUE(net->last_bus_event);
+  EXPECT_EQ(net->last_bus_event->state, canopen::can::BusState::ErrorActive);
+  // And on every change.
+  const auto before = rig.events.size();
+  ASSERT_TRUE(rig.app->set_simulated_link(1, false));
+  EXPECT_TRUE(rig.run_until([&] {
+    for (std::size_t i = before; i < rig.events.size(); ++i)
+      if (rig.events[i]->kind == EventKind::Bus && rig.events[i]->json.find(R"("state":"down")") != std::string::npos)
+        return true;
+    return false;
+  }, 2s));
+}
+
+// 7.3.2.2.1: an NMT reset communication of the gateway's own node undoes a
+// 1017h written since start; the REST view shows the value in force.
+TEST(AppDemo, ResetCommunicationOfTheOwnNodeRestoresItsHeartbeatTime) {
+  DemoRig rig;
+  auto hb = [&] {
+    const auto r = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1017", "subIndex": 0})");
+    return boost::json::parse(r.body).as_object().at("value").to_number<int>();
+  };
+  ASSERT_EQ(hb(), 1000) << "heartbeat-ms default";
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  ASSERT_EQ(hb(), 250);
+  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
+  // Saved with 1010h sub 2 ("save", 7.5.2.13) it survives the reset, until
+  // 1011h sub 2 ("load", 7.5.2.14) and the next reset.
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1010", "subIndex": 2, "value": 1702257011})").status,
+            200);
+  // Written after the save: the reset undoes it (so it did happen).
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x100C", "subIndex": 0, "value": 5})").status, 200);
+  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] {
+    const auto r = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x100C", "subIndex": 0})");
+    return boost::json::parse(r.body).as_object().at("value").to_number<int>() == 0;
+  }, 2s));
+  EXPECT_EQ(hb(), 250);
+  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1011", "subIndex": 2, "value": 1684107116})").status,
+            200);
+  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
+}
+
 TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 10); }));

@@ -181,6 +181,45 @@ TEST(Config, NodeRulesAreChecked) {
               HasSubstr("1 is reserved"));
 }
 
+// api-contract "Node monitoring without configuration": auto (the default)
+// watches the node anyway, 0 turns watching off, a number is the consumer
+// time (1016h).
+TEST(Config, HeartbeatConsumerIsAutoByDefaultZeroOrATime) {
+  const Config c = parse_config(
+      "networks:\n  - interface: can0\n    nodes:\n"
+      "      - {id: 1}\n"
+      "      - {id: 2, heartbeat-consumer-ms: auto}\n"
+      "      - {id: 3, heartbeat-consumer-ms: 0}\n"
+      "      - {id: 4, heartbeat-consumer-ms: 1500}\n"
+      "      - {id: 5, heartbeat-consumer-ms: 0x3E8}\n",
+      "gw.yaml");
+  const auto& nodes = c.networks.at(0).nodes;
+  ASSERT_EQ(nodes.size(), 5U);
+  EXPECT_EQ(nodes[0].heartbeat_consumer, std::nullopt) << "absent: auto";
+  EXPECT_EQ(nodes[1].heartbeat_consumer, std::nullopt);
+  EXPECT_EQ(nodes[2].heartbeat_consumer, 0ms) << "0: not watched";
+  EXPECT_EQ(nodes[3].heartbeat_consumer, 1500ms);
+  EXPECT_EQ(nodes[4].heartbeat_consumer, 1000ms);
+  // A node given on the command line only is watched automatically too.
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.eds = {{5, kEds}};
+  EXPECT_EQ(merge(Config{}, cli).networks.at(0).nodes.at(0).heartbeat_consumer, std::nullopt);
+
+  const std::string node = "networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        heartbeat-consumer-ms: ";
+  EXPECT_EQ(config_error(node + "never\n"),
+            "gw.yaml:5: networks[0].nodes[0].heartbeat-consumer-ms: 'never' is not auto, 0 (not watched) or a consumer "
+            "time in ms (1..65535)");
+  EXPECT_EQ(config_error(node + "-5\n"),
+            "gw.yaml:5: networks[0].nodes[0].heartbeat-consumer-ms: '-5' is not auto, 0 (not watched) or a consumer "
+            "time in ms (1..65535)");
+  EXPECT_EQ(config_error(node + "70000\n"),
+            "gw.yaml:5: networks[0].nodes[0].heartbeat-consumer-ms: 70000 is out of range 0..65535");
+  EXPECT_EQ(config_error(node + "1.5\n"),
+            "gw.yaml:5: networks[0].nodes[0].heartbeat-consumer-ms: '1.5' is not a whole number");
+  EXPECT_THAT(config_error(node + "[1]\n"), HasSubstr("heartbeat-consumer-ms: expected a single value"));
+}
+
 TEST(Config, FlagsWinOverTheFile) {
   Config file = parse_config("gateway: {id: from-file, node-id: 100, log-level: warn}\n"
                              "networks:\n  - interface: can0\n    heartbeat-ms: 250\n  - interface: can1\n"

@@ -2,7 +2,9 @@
 # started by the fixture (skipped when /usr/sbin/mosquitto is missing), and
 # the MQTT codec's unit tests. Paho is the independent reference client of
 # the tests (subscribers, requesters); the gateway does not use it.
-find_package(PahoMqttCpp REQUIRED)
+if(NOT TARGET PahoMqttCpp::paho-mqttpp3)  # found once per build (app tests use it too)
+  find_package(PahoMqttCpp REQUIRED)
+endif()
 canopen_unit_test(mqtt_tests SOURCES ${U}/mqtt/*_test.cpp LIBS gateway_mqtt PahoMqttCpp::paho-mqttpp3)
 if(TARGET mqtt_tests)
   add_executable(mqtt_publish_tool ${U}/mqtt/mqtt_publish_tool.cpp)

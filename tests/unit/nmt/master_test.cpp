@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "canopen/clock.hpp"
+#include "canopen/eds/eds.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
 #include "unit/nmt/nmt_test_support.hpp"
@@ -315,6 +316,135 @@ TEST_F(MasterTest, NodeGuarding_7_2_8_3_2_1_ZeroGuardTimeOrFactorDisables) {
   master.set_node_guarding(6, 0ms, 3, clock.now());
   EXPECT_EQ(master.next_deadline(), TimePoint::max());
   EXPECT_FALSE(master.set_node_guarding(0, 100ms, 3, clock.now()));
+}
+
+// ---- watching without a configured consumer time ---------------------------------------------
+// api-contract "Node monitoring without configuration": P from the node's
+// 1017h (7.5.2.20) in its EDS/DCF, else learnt from its heartbeats
+// (7.2.8.3.2.2); lost when no heartbeat came for 3 x P.
+
+std::string source_path(const char* rel) { return std::string(CANOPEN_SOURCE_DIR) + "/" + rel; }
+
+TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_PeriodFromTheEds1017h_LostAtThreeTimesPNotBefore) {
+  const auto io = eds::load_device_description(source_path("deploy/eds/cia401-io-module.eds"), 10);
+  ASSERT_EQ(producer_heartbeat_time(io.od), 1000ms) << "the EDS's DefaultValue";
+  ASSERT_TRUE(master.set_auto_watch(10, true, producer_heartbeat_time(io.od)));
+  rx("70A#05");  // with P known, one heartbeat starts the watch
+  take_events();
+  EXPECT_EQ(master.auto_watch_period(10), 1000ms);
+  advance(2999ms);
+  EXPECT_TRUE(events.empty()) << "not before 3 x P";
+  advance(1ms);
+  EXPECT_EQ(take_events(), (Strings{"state 10 lost operational/-"}));
+  EXPECT_TRUE(master.node(10)->lost);
+  rx("70A#05");
+  EXPECT_EQ(take_events(), (Strings{"hb 10 operational", "state 10 recovered operational/operational"}));
+  advance(3000ms);
+  EXPECT_EQ(take_events(), (Strings{"state 10 lost operational/-"})) << "the given P holds after recovery";
+
+  // A description whose 1017h is 0 gives no period: it is learnt instead.
+  const auto drive = eds::load_device_description(source_path("deploy/eds/cia402-drive.eds"), 5);
+  EXPECT_EQ(producer_heartbeat_time(drive.od), 0ms);
+}
+
+TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_PeriodLearntFromTwoHeartbeats_LostAtThreeTimesPNotBefore) {
+  rx("706#7F");  // node 6 is heard once: no period, never lost
+  rx("705#05");
+  advance(200ms);
+  rx("705#05");  // P = 200 ms
+  take_events();
+  EXPECT_EQ(master.auto_watch_period(5), 200ms);
+  EXPECT_EQ(master.auto_watch_period(6), 0ms);
+  advance(599ms);
+  EXPECT_TRUE(events.empty()) << "not before 3 x P";
+  advance(1ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"}));
+  advance(10s);
+  EXPECT_TRUE(events.empty()) << "lost once; node 6 is not watched without a period";
+  // Heard again: recovered, and two heartbeats give P again.
+  rx("705#7F");
+  advance(200ms);
+  rx("705#7F");
+  EXPECT_EQ(master.auto_watch_period(5), 200ms);
+  // A boot-up counts as a heartbeat for the deadline.
+  advance(500ms);
+  rx("705#00");
+  take_events();
+  advance(599ms);
+  EXPECT_TRUE(events.empty());
+  advance(1ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost initialising/-"}));
+}
+
+TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_LearntPeriodFollowsANodeThatSlowsDownOrSpeedsUp) {
+  auto beat = [&] { rx("705#05"); };
+  beat();
+  advance(100ms);
+  beat();  // P = 100 ms
+  advance(250ms);
+  beat();  // slower, but inside 3 x P: P grows to 250 ms at once
+  EXPECT_EQ(master.auto_watch_period(5), 250ms);
+  take_events();
+  advance(749ms);
+  EXPECT_TRUE(events.empty());
+  advance(1ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"}));
+  // The node was given 1017h = 1000 ms: lost at 3 x 250 ms once, then the
+  // two heartbeats after the recovery give the new P.
+  beat();
+  advance(1000ms);
+  beat();
+  EXPECT_EQ(master.auto_watch_period(5), 1000ms);
+  advance(1000ms);
+  beat();
+  take_events();
+  // Faster again: the longer intervals leave the window of 8.
+  for (int i = 0; i < 7; ++i) {
+    advance(100ms);
+    beat();
+  }
+  EXPECT_EQ(master.auto_watch_period(5), 1000ms);
+  advance(100ms);
+  beat();
+  EXPECT_EQ(master.auto_watch_period(5), 100ms);
+  EXPECT_EQ(take_events().size(), 8U) << "heartbeats only, never lost";
+  advance(300ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"}));
+}
+
+TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_OffForANodeConfiguredWithZero) {
+  ASSERT_TRUE(master.set_auto_watch(5, false));
+  for (int i = 0; i < 3; ++i) {
+    rx("705#05");
+    advance(100ms);
+  }
+  EXPECT_EQ(master.auto_watch_period(5), 0ms);
+  EXPECT_EQ(master.next_deadline(), TimePoint::max());
+  take_events();
+  advance(10s);
+  EXPECT_TRUE(events.empty());
+  EXPECT_FALSE(master.set_auto_watch(0, false));
+  EXPECT_FALSE(master.set_auto_watch(128, true));
+}
+
+TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_AConfiguredConsumerTimeWins) {
+  ASSERT_TRUE(master.set_heartbeat_consumer(5, 1000ms));
+  rx("705#05");
+  advance(100ms);
+  rx("705#05");  // a learnt P of 100 ms would make it lost at 300 ms
+  take_events();
+  advance(999ms);
+  EXPECT_TRUE(events.empty());
+  advance(1ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"}));
+  // Without the consumer the learnt period watches the node again.
+  ASSERT_TRUE(master.set_heartbeat_consumer(5, 0ms));
+  rx("705#05");
+  advance(100ms);
+  rx("705#05");
+  take_events();
+  advance(300ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"}));
 }
 
 }  // namespace

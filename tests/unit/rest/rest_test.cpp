@@ -38,6 +38,9 @@ TEST(Rest, GatewayAndNetwork) {
   EXPECT_TRUE(no.at("counters").is_object());
   EXPECT_TRUE(no.at("sync").as_object().contains("producer"));
   EXPECT_TRUE(no.at("time").as_object().contains("producer"));
+  // The bus state from the start, without a change (the demo bus has none).
+  ASSERT_TRUE(no.contains("lastBusEvent")) << n.body;
+  EXPECT_EQ(no.at("lastBusEvent").as_object().at("state").as_string(), "error-active");
 
   auto missing = rig.request("GET", "/api/v1/networks/9");
   EXPECT_EQ(missing.status, 404);
@@ -293,6 +296,20 @@ TEST(Rest, Sync) {
   }, 2s)) << rig.app->cache().network(1)->sync_count;
   EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/sync", R"({"counter": 300})").status, 400);
   EXPECT_EQ(rig.request("POST", "/api/v1/networks/3/sync").status, 404);
+}
+
+// The gateway's own node's settings as they are now: an SDO write changes
+// them, an NMT reset communication of the own node (7.3.2.2.1) undoes it.
+TEST(Rest, NetworkShowsTheOwnNodesSettingsAsTheyAreNow) {
+  RestRig rig;
+  auto heartbeat_ms = [&] {
+    return rig.request("GET", "/api/v1/networks/1").json().as_object().at("heartbeatMs").to_number<int>();
+  };
+  EXPECT_EQ(heartbeat_ms(), 1000);
+  ASSERT_EQ(rig.request("PUT", "/api/v1/networks/1/nodes/127/sdo/1017/0", R"({"value": 250})").status, 200);
+  EXPECT_EQ(heartbeat_ms(), 250);
+  ASSERT_EQ(rig.request("POST", "/api/v1/networks/1/nodes/127/nmt", R"({"command": "reset-comm"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] { return heartbeat_ms() == 1000; }, 2s));
 }
 
 TEST(Rest, BusDownIs503) {

@@ -21,6 +21,19 @@
 //     boot-up) received after it is configured; the node is Lost when no
 //     heartbeat arrived for exactly the consumer time (at last + T, not
 //     before). After Lost, the next heartbeat gives Recovered.
+//   - Watching without a configured consumer time (the contract's "node
+//     monitoring without configuration", on for every node by default): a
+//     node heard that has neither a heartbeat consumer nor node guarding is
+//     Lost when no heartbeat or boot-up came for 3 x P (at last + 3P, not
+//     before). P is the period given with set_auto_watch() (the node's
+//     1017h from its EDS/DCF), else learnt: the longest of the last 8
+//     intervals between consecutive heartbeats, so P follows a node that
+//     slows down at once and one that speeds up within 8 heartbeats. A
+//     learnt P needs two heartbeats; a boot-up counts as a heartbeat for
+//     the deadline but starts no interval, and after Lost the interval
+//     history is dropped and the next two heartbeats give P anew (the node
+//     may have been given another 1017h meanwhile). set_auto_watch(node,
+//     false) turns it off.
 //   - Node guarding: the first request goes out when guarding is set up,
 //     then one every guard time. A response whose toggle bit equals the
 //     previous accepted one is ignored and counted in toggle_errors
@@ -33,6 +46,7 @@
 // and must not call back into the master.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -60,6 +74,11 @@ struct NodeStatus {
   bool lost = false;
 };
 
+// A node's producer heartbeat time (1017h) from its EDS/DCF description (the
+// DCF's ParameterValue, else the DefaultValue): the period to give
+// NmtMaster::set_auto_watch(). Zero when the description has none or 0.
+Duration producer_heartbeat_time(const od::ObjectDictionary& description);
+
 class NmtMaster {
  public:
   NmtMaster(FrameSink sink, EventSink events);
@@ -81,6 +100,14 @@ class NmtMaster {
   // are unused). Call again after 1016h changes.
   void configure_consumers(const od::ObjectDictionary& dictionary);
 
+  // Watching of `node` (1..127) while it has no heartbeat consumer and no
+  // node guarding (see above): enabled with `period` as P (0: learn it from
+  // the node's heartbeats), or off. Every node is watched with a learnt P
+  // unless this says otherwise. Returns false for an invalid node-ID.
+  bool set_auto_watch(std::uint8_t node, bool enabled, Duration period = Duration::zero());
+  // The P watching uses for `node` now; zero when not known (yet) or not watched.
+  Duration auto_watch_period(std::uint8_t node) const;
+
   // Node guarding for one node: a request every guard_time, Lost after
   // guard_time x life_time_factor without a response. Either 0 removes it.
   bool set_node_guarding(std::uint8_t node, Duration guard_time, std::uint8_t life_time_factor, TimePoint now);
@@ -93,6 +120,16 @@ class NmtMaster {
   struct Consumer {
     Duration time{};
     TimePoint deadline = TimePoint::max();  // max: waiting for the first heartbeat
+  };
+  static constexpr std::size_t kLearnWindow = 8;
+  struct AutoWatch {
+    bool enabled = true;
+    Duration period{};  // given; zero: learnt from `intervals`
+    std::array<Duration, kLearnWindow> intervals{};
+    std::size_t count = 0, next = 0;          // ring of the latest intervals
+    std::optional<TimePoint> last_heartbeat;  // start of the next interval
+    TimePoint deadline = TimePoint::max();
+    Duration p() const;
   };
   struct Guarding {
     Duration guard_time{};
@@ -109,6 +146,10 @@ class NmtMaster {
   // Updates the state and emits Recovered or a state change with `cause`.
   void report_state(std::uint8_t node, NmtState s, NodeStateEvent::Cause cause, const can::Frame& f);
   void lose(std::uint8_t node);
+  // A heartbeat (or boot-up) of `node` for auto watching; was_lost: the
+  // node was Lost until this frame.
+  void auto_heard(std::uint8_t node, TimePoint now, bool boot_up, bool was_lost);
+  bool has_explicit_watch(std::uint8_t node) const { return consumers_.contains(node) || guarding_.contains(node); }
   void emit(const EventBody& body, can::Frame::Clock::time_point ts);
 
   FrameSink sink_;
@@ -116,6 +157,7 @@ class NmtMaster {
   std::map<std::uint8_t, NodeStatus> nodes_;
   std::map<std::uint8_t, Consumer> consumers_;
   std::map<std::uint8_t, Guarding> guarding_;
+  std::map<std::uint8_t, AutoWatch> auto_;
 };
 
 }  // namespace canopen::nmt
