@@ -181,6 +181,15 @@ class SdoClient {
   void set_node_cob_ids(std::uint8_t node, std::uint32_t request_id, std::uint32_t response_id);
   void forget_block_support(std::uint8_t node);
 
+  // Called after every successful download, before its completion handler,
+  // with the node, the object and the bytes written: lets a service follow
+  // what this client changed on a node (Network: the PDO decoder follows a
+  // node's PDO parameters). One observer; it must not call back into the
+  // client.
+  using DownloadObserver =
+      std::function<void(std::uint8_t node, const Multiplexer& mux, const Bytes& data)>;
+  void set_download_observer(DownloadObserver observer) { download_observer_ = std::move(observer); }
+
   // Requests of the node: waiting plus running.
   std::size_t pending(std::uint8_t node) const;
   bool busy(std::uint8_t node) const;
@@ -271,6 +280,7 @@ class SdoClient {
   std::array<Node, 128> nodes_;       // index = node-ID; [0] unused
   std::vector<std::uint8_t> running_; // nodes with an active transfer
   RequestId next_id_ = 1;
+  DownloadObserver download_observer_;
 };
 
 }  // namespace canopen::sdo
