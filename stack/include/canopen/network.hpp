@@ -17,7 +17,9 @@
 // that PDO's COB-ID, transmission type or mapping in the decoder (TPDOs)
 // and producer (RPDOs) before the download's completion handler runs; the
 // node's PDO configuration can also be read back from the device
-// (read_pdo_config(), or at each boot-up). See pdo/remote_config.hpp.
+// (read_pdo_config(), or at each boot-up). A boot-up alone changes nothing
+// here: whether the device kept what was written (stored) or went back to
+// its defaults is only known by reading. See pdo/remote_config.hpp.
 //
 // The caller MUST pass every received frame to on_frame(), call on_time()
 // when now >= next_deadline() (re-read it after any call), and pass bus
