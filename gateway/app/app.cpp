@@ -258,6 +258,9 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
       n.network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor,
                                          canopen::SteadyClock::now());
     }
+    // Reading the PDO configuration needs the description (types, names).
+    const bool read_pdo = it != n.descriptions.end() &&
+                          (node.boot && node.boot->read_pdo_config ? *node.boot->read_pdo_config : cfg.read_pdo_config);
     if (node.boot) {
       canopen::nmt::NodeBootConfig boot;
       if (it != n.descriptions.end()) {
@@ -267,7 +270,12 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
             boot.serial = std::nullopt;
       }
       boot.start = node.boot->start;
-      n.network->configure_boot(node.id, boot);
+      n.network->configure_boot(node.id, boot, read_pdo);
+    } else if (read_pdo) {
+      // Only watched, but its PDOs are read at each boot-up: no checks, no DCF, no start.
+      canopen::nmt::NodeBootConfig watch_only;
+      watch_only.start = false;
+      n.network->configure_boot(node.id, watch_only, true);
     }
   }
   cache_.add_network(number, cfg.simulated ? "demo" : cfg.interface, cfg.simulated);
@@ -378,6 +386,48 @@ bool App::send_sync(std::uint32_t net_number, std::optional<std::uint8_t> counte
   audit("SYNC by " + requester(who) + ": net " +
         std::to_string(net_number) + (counter ? " counter " + std::to_string(*counter) : std::string()) + ": sent");
   return true;
+}
+
+const canopen::pdo::RemotePdoTable* App::pdo_config(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return nullptr;
+  return &nets_[net_number - 1]->network->pdo_config();
+}
+
+const canopen::pdo::PdoConfig* App::rpdo_config(std::uint32_t net_number, std::uint8_t node,
+                                                std::uint16_t number) const {
+  if (net_number == 0 || net_number > nets_.size()) return nullptr;
+  return nets_[net_number - 1]->network->rpdo().config(node, number);
+}
+
+std::error_code App::read_pdo_config(std::uint32_t net_number, std::uint8_t node,
+                                     std::function<void(const canopen::pdo::PdoReadReport&)> done,
+                                     std::string_view who) {
+  const std::string line = "PDO configuration read by " + requester(who) + ": net " + std::to_string(net_number) +
+                           " node " + std::to_string(node);
+  Net* n = net(net_number);
+  if (n == nullptr) {
+    const auto ec = make_error_code(canopen::SdoAbort::NoSuchObject);
+    audit(line + ": " + ec.message());
+    return ec;
+  }
+  auto ec = n->network->read_pdo_config(
+      node,
+      [this, line, done = std::move(done)](const canopen::pdo::PdoReadReport& r) {
+        audit(line + ": " + r.summary());
+        if (done) done(r);
+      },
+      canopen::SteadyClock::now());
+  if (ec) {
+    audit(line + ": " + ec.message());
+    return ec;
+  }
+  n->driver->poke();
+  return {};
+}
+
+canopen::sim::Simulator* App::simulator(std::uint32_t net_number) {
+  Net* n = net(net_number);
+  return n == nullptr ? nullptr : n->simulator.get();
 }
 
 bool App::set_simulated_link(std::uint32_t net_number, bool up) {

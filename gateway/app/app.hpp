@@ -52,6 +52,16 @@ namespace canopen::can {
 class MemoryBus;
 }
 
+namespace canopen::sim {
+class Simulator;
+}
+
+namespace canopen::pdo {
+class RemotePdoTable;
+struct PdoConfig;
+struct PdoReadReport;
+}
+
 namespace gateway {
 
 class App {
@@ -124,6 +134,24 @@ class App {
   std::error_code write_rpdo(std::uint32_t net, std::uint8_t node, std::uint16_t number,
                              std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
                              canopen::Bytes* sent = nullptr, std::string_view who = {});
+  // The PDO configuration the gateway uses for the described nodes of
+  // network `net` (canopen::Network::pdo_config(): EDS/DCF, then what its
+  // SDO writes changed and what was read from the devices); nullptr for an
+  // unknown network.
+  const canopen::pdo::RemotePdoTable* pdo_config(std::uint32_t net) const;
+  // The configuration `node`'s RPDO `number` is produced with now; nullptr
+  // when it is not produced (unknown, disabled by COB-ID bit 31, or its
+  // mapping does not resolve). Valid until the next event on the io thread.
+  const canopen::pdo::PdoConfig* rpdo_config(std::uint32_t net, std::uint8_t node, std::uint16_t number) const;
+  // Reads `node`'s PDO configuration from the device by SDO
+  // (canopen::Network::read_pdo_config); the decoder and producer follow,
+  // then `done` runs once on the io thread. Errors (done not called):
+  // SdoAbort::NoSuchObject for an unknown network or a node without
+  // EDS/DCF, SdoAbort::NoSdoConnection when its SDO queue is full.
+  // Audited as done by `who` ("" = anonymous).
+  std::error_code read_pdo_config(std::uint32_t net, std::uint8_t node,
+                                  std::function<void(const canopen::pdo::PdoReadReport&)> done,
+                                  std::string_view who = {});
   // Sends one SYNC (with the counter when given) on network `net` and
   // delivers it to the gateway's own services (synchronous RPDOs). False
   // for an unknown network. Audited as done by `who` ("" = anonymous).
@@ -136,6 +164,10 @@ class App {
   // or disturb its frames (can::BusFaults). nullptr for an unknown or real
   // network.
   canopen::can::MemoryBus* simulated_bus(std::uint32_t net);
+  // A simulated network's devices (tests: e.g. a device whose stored
+  // configuration differs from its EDS, before start()); nullptr for an
+  // unknown or real network.
+  canopen::sim::Simulator* simulator(std::uint32_t net);
 
   struct Counters {
     std::uint64_t sdo_requests = 0;

@@ -33,6 +33,8 @@ constexpr RouteRole kRouteRoles[] = {
     {"PUT", "/api/v1/networks/{net}/nodes/{node}/sdo/{index}/{sub}", Role::Operator},
     {"POST", "/api/v1/networks/{net}/nodes/{node}/nmt", Role::Operator},
     {"PUT", "/api/v1/networks/{net}/nodes/{node}/rpdo/{n}", Role::Operator},
+    // Reads the device, but changes how the gateway decodes and produces its PDOs.
+    {"POST", "/api/v1/networks/{net}/nodes/{node}/pdo/read", Role::Operator},
     {"POST", "/api/v1/networks/{net}/sync", Role::Operator},
 };
 

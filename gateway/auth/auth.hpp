@@ -3,7 +3,8 @@
 // the HTTP authorizer that combines them with audit lines for failures.
 //
 // Roles (role.hpp): viewer reads, operator writes (SDO download, RPDO, SYNC,
-// NMT start/stop/pre-operational), admin resets (NMT reset node/comm).
+// NMT start/stop/pre-operational, PDO configuration read), admin resets
+// (NMT reset node/comm).
 // NMT's role depends on the command in the body, so the HTTP layer only
 // asks for operator on the NMT route and the request handler (App) checks
 // the command with required_role(RequestKind, nmt command) for REST and

@@ -157,18 +157,23 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
       g->fail("guard-time-ms and life-time-factor must both be set (or both 0)");
   }
   if (auto b = a.get("boot")) {
-    b->expect_map({"check-identity", "configure", "start"});
+    b->expect_map({"check-identity", "configure", "start", "read-pdo-config"});
     BootConfig bc;
     if (auto v = b->get("check-identity")) bc.check_identity = v->boolean();
     if (auto v = b->get("configure")) bc.configure = v->boolean();
     if (auto v = b->get("start")) bc.start = v->boolean();
+    if (auto v = b->get("read-pdo-config")) bc.read_pdo_config = v->boolean();
     if (bc.configure && n.eds.empty()) b->fail("configure: true needs an eds or dcf file for the node");
+    // The mapped objects' types and names come from the EDS/DCF.
+    if (bc.read_pdo_config.value_or(false) && n.eds.empty())
+      b->fail("read-pdo-config: true needs an eds or dcf file for the node");
     n.boot = bc;
   }
 }
 
 void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id, const std::string& dir) {
-  a.expect_map({"interface", "simulated", "simulation", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "nodes"});
+  a.expect_map(
+      {"interface", "simulated", "simulation", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "boot", "nodes"});
   auto iface = a.get("interface");
   if (auto sim = a.get("simulated")) net.simulated = sim->boolean();
   if (net.simulated) {
@@ -206,6 +211,10 @@ void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id
     t->expect_map({"produce", "period-ms"});
     if (auto v = t->get("produce")) net.time.produce = v->boolean();
     if (auto v = t->get("period-ms")) net.time.period = std::chrono::milliseconds(v->integer(10, 86'400'000));
+  }
+  if (auto b = a.get("boot")) {
+    b->expect_map({"read-pdo-config"});  // the rest of boot: is per node
+    if (auto v = b->get("read-pdo-config")) net.read_pdo_config = v->boolean();
   }
   std::set<int> seen;
   for (const auto& item : a.get("nodes") ? a.get("nodes")->items() : std::vector<At>{}) {

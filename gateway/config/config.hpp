@@ -37,6 +37,11 @@ struct BootConfig {
   bool check_identity = true;  // compare 1000h/1018h with the EDS/DCF
   bool configure = false;      // write the DCF's PDO, heartbeat and ParameterValue entries
   bool start = false;          // NMT start once configured
+  // Read the node's PDO configuration (1400h-1BFFh) from the device after
+  // the identity check and DCF download, before the NMT start, so its real
+  // mapping wins over the EDS (Network::configure_boot). nullopt: the
+  // network's setting.
+  std::optional<bool> read_pdo_config;
 };
 
 struct NodeConfig {
@@ -79,6 +84,10 @@ struct NetworkConfig {
   std::chrono::milliseconds heartbeat_producer{1000};  // the gateway's 1017h
   SyncConfig sync;
   TimeConfig time;
+  // boot: {read-pdo-config: true}: BootConfig::read_pdo_config for every
+  // node with an EDS/DCF that does not set it itself (nodes without boot:
+  // get a boot-up sequence that only reads the PDO configuration).
+  bool read_pdo_config = false;
   std::vector<NodeConfig> nodes;
 };
 

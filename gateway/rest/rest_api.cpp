@@ -9,7 +9,9 @@
 
 #include "canopen/eds/eds.hpp"
 #include "canopen/json_value.hpp"
+#include "canopen/pdo/config_reader.hpp"
 #include "canopen/pdo/mapping.hpp"
+#include "canopen/pdo/remote_config.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
 #include "eds_report.hpp"
@@ -425,12 +427,16 @@ void rpdo(App& app, const Request& req, Responder respond) {
   const std::string what = "node " + std::to_string(node) + " RPDO" + std::to_string(*number);
   if (desc == nullptr)
     return respond(problem_response(404, "node " + std::to_string(node) + " has no EDS/DCF, so its RPDOs are unknown"));
-  auto cfg = canopen::pdo::read_pdo(desc->od, canopen::pdo::Direction::Receive, static_cast<std::uint16_t>(*number));
-  if (!cfg || !cfg->comm.cob_id.valid())
-    return respond(problem_response(404, "the node's EDS/DCF has no usable " + what));
+  // The configuration in effect: the EDS/DCF's unless SDO writes or a read
+  // from the device changed it (GET .../pdo shows it).
+  const auto* in_effect = app.rpdo_config(net, node, static_cast<std::uint16_t>(*number));
+  if (in_effect == nullptr)
+    return respond(problem_response(404, what + " is not in use (not in its EDS/DCF, disabled by COB-ID bit 31, or "
+                                           "its mapping does not resolve; see GET .../pdo)"));
+  const canopen::pdo::PdoConfig cfg = *in_effect;  // a copy: the pointer lives only until the next change
 
   std::string error;
-  auto body = rest::parse_rpdo_body(req.body, *cfg, desc->od, what, error);
+  auto body = rest::parse_rpdo_body(req.body, cfg, desc->od, what, error);
   if (!body) return respond(problem_response(400, error));
   const auto& values = body->values;
   const auto& raw = body->raw;
@@ -445,10 +451,141 @@ void rpdo(App& app, const Request& req, Responder respond) {
   out["network"] = net;
   out["node"] = node;
   out["rpdo"] = *number;
-  out["cobId"] = cfg->comm.cob_id.can_id();
-  out["transmissionType"] = cfg->comm.transmission_type;
+  out["cobId"] = cfg.comm.cob_id.can_id();
+  out["transmissionType"] = cfg.comm.transmission_type;
   out["raw"] = hex_text(sent);
   respond(json_response(out));
+}
+
+// ---- PDO configuration in effect (issue 11) ----------------------------------
+
+json::object pdo_json(const canopen::pdo::RemotePdo& p, const canopen::Result<canopen::pdo::PdoConfig>& cfg) {
+  using canopen::pdo::Direction;
+  const auto& c = p.parameters.comm;
+  json::object o;
+  o["direction"] = p.key.direction == Direction::Transmit ? "tpdo" : "rpdo";
+  o["number"] = p.key.number;
+  o["commIndex"] = canopen::pdo::comm_index(p.key.direction, p.key.number);
+  o["mappingIndex"] = canopen::pdo::mapping_index(p.key.direction, p.key.number);
+  o["cobId"] = c.cob_id.can_id();
+  o["cobIdRaw"] = c.cob_id.raw;
+  o["enabled"] = c.cob_id.valid();
+  o["rtrAllowed"] = c.cob_id.rtr_allowed();
+  o["extended"] = c.cob_id.extended();
+  o["transmissionType"] = c.transmission_type;
+  o["inhibitTime"] = c.inhibit_time;
+  o["eventTimer"] = c.event_timer;
+  o["syncStart"] = c.sync_start;
+  const unsigned count = p.parameters.count;
+  o["kind"] = count == 0xFE ? "sam-mpdo" : count == 0xFF ? "dam-mpdo" : "normal";
+  json::array mapping;
+  if (cfg) {
+    for (const auto& e : cfg->entries) {
+      json::object m;
+      m["index"] = e.index;
+      m["subIndex"] = e.sub;
+      m["bits"] = e.bits;
+      m["name"] = e.name;
+      m["type"] = std::string(canopen::cia309_name(e.type));
+      m["dummy"] = e.dummy;
+      mapping.push_back(std::move(m));
+    }
+    o["length"] = cfg->byte_length();
+  } else {
+    // Not resolvable: the raw entries as the device has them, and why.
+    for (unsigned i = 1; i <= count && i <= canopen::pdo::kMaxMappedEntries; ++i) {
+      const auto it = p.parameters.entries.find(static_cast<std::uint8_t>(i));
+      if (it == p.parameters.entries.end()) break;
+      const auto e = canopen::pdo::MappingEntry::from_raw(it->second);
+      json::object m;
+      m["index"] = e.index;
+      m["subIndex"] = e.sub;
+      m["bits"] = e.bits;
+      mapping.push_back(std::move(m));
+    }
+    o["error"] = cfg.error().detail;
+  }
+  o["mapping"] = std::move(mapping);
+  o["source"] = std::string(canopen::pdo::to_string(p.source));
+  if (!p.read_error.empty()) o["readError"] = p.read_error;
+  return o;
+}
+
+json::array pdos_json(const canopen::pdo::RemotePdoTable& table, std::uint8_t node) {
+  json::array list;
+  for (const auto* p : table.pdos(node)) list.push_back(pdo_json(*p, table.resolve(node, p->key)));
+  return list;
+}
+
+// The node's PDO table, or the 404 when it has none (no EDS/DCF).
+const canopen::pdo::RemotePdoTable* node_pdo_table(const App& app, std::uint32_t net, std::uint8_t node,
+                                                   std::optional<Response>& err) {
+  const auto* table = app.pdo_config(net);
+  if (table == nullptr || !table->has_node(node))
+    err = problem_response(404, "node " + std::to_string(node) + " on network " + std::to_string(net) +
+                                    " has no EDS/DCF, so its PDOs are not decoded");
+  return err ? nullptr : table;
+}
+
+void get_pdo(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  std::optional<Response> err;
+  const auto* table = node_pdo_table(app, net, node, err);
+  if (table == nullptr) return respond(std::move(*err));
+  json::object o;
+  o["network"] = net;
+  o["node"] = node;
+  o["pdos"] = pdos_json(*table, node);
+  respond(json_response(o));
+}
+
+void read_pdo(App& app, const Request& req, Responder respond) {
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  std::optional<Response> err;
+  if (node_pdo_table(app, net, node, err) == nullptr) return respond(std::move(*err));
+  if (auto bus = check_bus(app, net)) return respond(std::move(*bus));
+  auto ec = app.read_pdo_config(
+      net, node,
+      [a = &app, net, node, respond](const canopen::pdo::PdoReadReport& r) {
+        if (r.cancelled) return respond(problem_response(503, "node " + std::to_string(node) + " booted during the read; " + r.summary()));
+        if (r.stopped) {
+          const int status = r.stopped == make_error_code(canopen::SdoAbort::Timeout) ? 504 : 502;
+          return respond(problem_response(status, r.summary()));
+        }
+        json::array read;
+        for (const auto& p : r.pdos) {
+          json::object o;
+          o["direction"] = p.key.direction == canopen::pdo::Direction::Transmit ? "tpdo" : "rpdo";
+          o["number"] = p.key.number;
+          o["ok"] = p.parameters.has_value();
+          if (!p.parameters) {
+            o["error"] = p.detail;
+            if (&p.error.category() == &canopen::sdo_abort_category()) {
+              char code[16];
+              std::snprintf(code, sizeof code, "0x%08X", static_cast<unsigned>(p.error.value()));
+              o["abortCode"] = code;
+            }
+          }
+          read.push_back(std::move(o));
+        }
+        json::object out;
+        out["network"] = net;
+        out["node"] = node;
+        out["summary"] = r.summary();
+        out["read"] = std::move(read);
+        out["pdos"] = pdos_json(*a->pdo_config(net), node);
+        respond(json_response(out));
+      },
+      req.who);
+  if (ec == make_error_code(canopen::SdoAbort::NoSdoConnection))
+    return respond(problem_response(429, "too many SDO requests queued for node " + std::to_string(node)));
+  if (ec) respond(problem_response(404, "node " + std::to_string(node) + ": " + ec.message()));
 }
 
 void sync(App& app, const Request& req, Responder respond) {
@@ -501,6 +638,8 @@ void register_rest_routes(http::HttpServer& server, App& app) {
   json_route("GET", node + "/od", get_od);
   json_route("GET", node + "/emcy", get_emcy);
   json_route("PUT", node + "/rpdo/{n}", rpdo);
+  json_route("GET", node + "/pdo", get_pdo);
+  json_route("POST", node + "/pdo/read", read_pdo);
   json_route("POST", "/api/v1/networks/{net}/sync", sync);
 }
 

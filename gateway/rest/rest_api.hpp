@@ -11,6 +11,8 @@
 //   GET  /api/v1/networks/{net}/nodes/{node}/od          the node's EDS/DCF dictionary
 //   GET  /api/v1/networks/{net}/nodes/{node}/emcy        recent EMCYs, newest first
 //   PUT  /api/v1/networks/{net}/nodes/{node}/rpdo/{n}    {"values":[{index,subIndex,value}]} or {"raw":"hex"}
+//   GET  /api/v1/networks/{net}/nodes/{node}/pdo         the node's PDO configuration in effect and its source
+//   POST /api/v1/networks/{net}/nodes/{node}/pdo/read    read it from the device by SDO, then as GET
 //   POST /api/v1/networks/{net}/sync                     one SYNC, optionally {"counter": n}
 //
 // Errors are application/problem+json (400 malformed, 404 unknown network /
@@ -19,7 +21,7 @@
 // application/x-protobuf` bodies, and SDO replies (and their problems) are
 // binary protobuf with `Accept: application/x-protobuf`; NMT replies are
 // protobuf when the request was. The listings (gateway, network, nodes,
-// node, od, emcy), RPDO and SYNC answer JSON only.
+// node, od, emcy, pdo), RPDO, PDO read and SYNC answer JSON only.
 //
 // The same routes, /metrics and /api/v1/openapi.json are described in
 // gateway/rest/openapi.json (built into the binary, served as is).

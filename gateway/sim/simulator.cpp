@@ -251,6 +251,20 @@ Device* Simulator::device(std::uint8_t node) {
   return it == nodes_.end() ? nullptr : it->second->device.get();
 }
 
+bool Simulator::store(std::uint8_t node) {
+  auto it = nodes_.find(node);
+  if (it == nodes_.end()) return false;
+  Node& n = *it->second;
+  // Values only: `initial` keeps no hooks or observers of the live dictionary.
+  for (const auto& [index, obj] : n.od.objects())
+    for (const auto& [sub, entry] : obj.subs)
+      if (od::SubEntry* e = n.initial.find(index, sub)) e->value = entry.value;
+  // The device's own power-on values too (before its first start() there
+  // are none yet: it takes the current values then).
+  (void)n.device->store_parameters(1);
+  return true;
+}
+
 bool Simulator::raise_emcy(std::uint8_t node, std::uint16_t code) {
   Device* d = device(node);
   if (d == nullptr || !d->raise_emcy(code, register_bits_for(code), SteadyClock::now())) return false;

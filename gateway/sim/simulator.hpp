@@ -78,6 +78,11 @@ class Simulator {
   // already present.
   bool raise_emcy(std::uint8_t node, std::uint16_t code);
   Device* device(std::uint8_t node);
+  // The node's current dictionary values become the ones its resets
+  // restore, as if stored in non-volatile memory: a device whose
+  // configuration (e.g. PDO mapping) differs from its EDS. False for an
+  // unknown node.
+  bool store(std::uint8_t node);
   std::size_t size() const { return nodes_.size(); }
 
  private:

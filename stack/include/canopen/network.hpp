@@ -11,6 +11,16 @@
 // synchronous types driven by the SYNCs this network sees), EMCY, SYNC and
 // TIME consumers.
 //
+// PDOs follow the devices (CiA 301 7.2.2, 7.5.2.35-7.5.2.39): every
+// successful SDO download by this network's SDO client to 1400h-1BFFh of a
+// described node - whoever asked for it, boot-up DCF included - changes
+// that PDO's COB-ID, transmission type or mapping in the decoder (TPDOs)
+// and producer (RPDOs) before the download's completion handler runs; the
+// node's PDO configuration can also be read back from the device
+// (read_pdo_config(), or at each boot-up). A boot-up alone changes nothing
+// here: whether the device kept what was written (stored) or went back to
+// its defaults is only known by reading. See pdo/remote_config.hpp.
+//
 // The caller MUST pass every received frame to on_frame(), call on_time()
 // when now >= next_deadline() (re-read it after any call), and pass bus
 // events to report(). Not thread-safe; handlers run synchronously inside
@@ -20,8 +30,10 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "canopen/emcy/emcy.hpp"
@@ -31,7 +43,9 @@
 #include "canopen/nmt/boot.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/object_dictionary.hpp"
+#include "canopen/pdo/config_reader.hpp"
 #include "canopen/pdo/receiver.hpp"
+#include "canopen/pdo/remote_config.hpp"
 #include "canopen/pdo/transmitter.hpp"
 #include "canopen/sdo/client.hpp"
 
@@ -50,15 +64,31 @@ class Network {
   Network(const Network&) = delete;
   Network& operator=(const Network&) = delete;
 
-  // Describes a remote node (its EDS/DCF dictionary): its TPDOs are decoded
-  // and its RPDOs can be written through rpdo(). Returns problems that leave
-  // parts undecodable.
+  // Describes a remote node (its EDS/DCF dictionary, copied): its TPDOs are
+  // decoded and its RPDOs can be written through rpdo(). Returns problems
+  // that leave parts undecodable.
   std::vector<std::string> add_node(std::uint8_t node, const od::ObjectDictionary& description);
   // Boot-up configuration of `node` (nmt/boot.hpp): on each boot-up its
   // identity is checked, its DCF written and it is started, as `config`
   // says; every step is a BootConfigEvent in this network's stream.
-  // config.dcf MUST outlive the network.
-  bool configure_boot(std::uint8_t node, nmt::NodeBootConfig config);
+  // config.dcf MUST outlive the network. With read_pdo_config, after the
+  // identity check and DCF download and before the NMT start (so no TPDO
+  // is decoded with a mapping the device does not use) the node's PDO
+  // configuration is read as read_pdo_config() does; the Start and Done
+  // events follow the read, Done's detail summing it up. Aborts for single
+  // PDOs keep the earlier configuration of those PDOs and do not stop the
+  // boot; a local error (timeout) is Failed, as for any other step.
+  bool configure_boot(std::uint8_t node, nmt::NodeBootConfig config, bool read_pdo_config = false);
+  // Reads the PDO configuration of a node added with add_node() from the
+  // device by SDO (pdo/config_reader.hpp): every PDO its description has,
+  // plus any created by writes. What was read replaces what was in effect
+  // (source Device), the decoder and producer follow, then `done` gets the
+  // report. A read already running for the node is joined. Errors (done
+  // not called): SdoAbort::NoSuchObject for a node not added, the SDO
+  // client's submit errors. A boot-up of the node cancels its read.
+  std::error_code read_pdo_config(std::uint8_t node, pdo::PdoConfigReader::Done done, TimePoint now);
+  // The PDO parameters in effect for the described nodes and their source.
+  const pdo::RemotePdoTable& pdo_config() const { return pdo_table_; }
   // Sends an NMT command (node 0 = all) and, for start/stop/pre-operational,
   // nothing else; the nodes' heartbeats report the result.
   bool send_nmt(NmtCommand command, std::uint8_t node) { return nmt_.send_command(command, node); }
@@ -80,6 +110,9 @@ class Network {
 
  private:
   void emit(EventBody body, can::Frame::Clock::time_point timestamp);
+  void on_boot_event(const BootConfigEvent& ev);
+  // The decoder or producer takes the PDO's configuration from pdo_table_.
+  void refresh_pdo(std::uint8_t node, pdo::PdoKey key);
 
   const od::ObjectDictionary& own_;
   EventHandler on_event_;
@@ -97,6 +130,10 @@ class Network {
   emcy::EmcyConsumer emcy_;
   emcy::SyncConsumer sync_;
   emcy::TimeConsumer time_;
+  pdo::RemotePdoTable pdo_table_;
+  pdo::PdoConfigReader pdo_reader_;
+  // Nodes whose boot-up reads the PDO configuration -> NMT start afterwards.
+  std::map<std::uint8_t, bool> boot_reads_;
 };
 
 }  // namespace canopen

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "canopen/sdo/abort.hpp"
+
 namespace canopen {
 
 Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler on_event, sdo::ClientConfig sdo_config,
@@ -15,8 +17,11 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
              emit(body, ts == can::Frame::Clock::time_point{} ? wall_() : ts);
              // The boot-up is reported before its configuration starts.
              if (const auto* s = std::get_if<NodeStateEvent>(&body);
-                 s != nullptr && boot_ && s->cause == NodeStateEvent::Cause::BootUp)
-               boot_->on_boot_up(s->node, now_);
+                 s != nullptr && s->cause == NodeStateEvent::Cause::BootUp) {
+               // What a rebooted node answers belongs to its new life.
+               pdo_reader_.cancel(s->node, now_);
+               if (boot_) boot_->on_boot_up(s->node, now_);
+             }
            }),
       sdo_(sdo_config, sink),
       pdo_(sink, [this](PdoEvent ev) { emit(std::move(ev), frame_time_); }),
@@ -27,12 +32,17 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
               emit(ev, frame_time_);
               rpdo_.on_sync(ev.counter, now_);  // synchronous RPDO data goes out on this SYNC
             }),
-      time_(own, [this](const TimeEvent& ev) { emit(ev, frame_time_); }) {
+      time_(own, [this](const TimeEvent& ev) { emit(ev, frame_time_); }),
+      pdo_reader_(sdo_, [this] { return now_; }) {
   pdo_.set_sync_window([this](TimePoint now) { return sync_.in_sync_window(now); });
+  sdo_.set_download_observer([this](std::uint8_t node, const sdo::Multiplexer& mux, const Bytes& data) {
+    if (auto key = pdo_table_.apply_download(node, mux.index, mux.sub, data)) refresh_pdo(node, *key);
+  });
   configure_heartbeat_consumers();
 }
 
 std::vector<std::string> Network::add_node(std::uint8_t node, const od::ObjectDictionary& description) {
+  (void)pdo_table_.add_node(node, description);  // its problems are the decoder's below
   auto problems = pdo_.add_node(node, description);
   for (const auto& cfg : pdo::read_all(description, pdo::Direction::Receive, &problems)) {
     if (!cfg.comm.cob_id.valid() || cfg.kind != pdo::MappingKind::Normal) continue;
@@ -42,13 +52,115 @@ std::vector<std::string> Network::add_node(std::uint8_t node, const od::ObjectDi
   return problems;
 }
 
-bool Network::configure_boot(std::uint8_t node, nmt::NodeBootConfig config) {
+bool Network::configure_boot(std::uint8_t node, nmt::NodeBootConfig config, bool read_pdo_config) {
   if (!boot_) {
     boot_ = std::make_unique<nmt::BootConfigurator>(
         sdo_, [this](NmtCommand cmd, std::uint8_t n) { nmt_.send_command(cmd, n); },
-        [this](const BootConfigEvent& ev) { emit(ev, wall_()); }, [this] { return now_; });
+        [this](const BootConfigEvent& ev) { on_boot_event(ev); }, [this] { return now_; });
+  }
+  if (node < 1 || node > 127) return false;
+  if (read_pdo_config) {
+    // The configurator stops before the start; the read finishes the boot.
+    boot_reads_[node] = config.start;
+    config.start = false;
+  } else {
+    boot_reads_.erase(node);
   }
   return boot_->configure(node, std::move(config));
+}
+
+void Network::on_boot_event(const BootConfigEvent& ev) {
+  const auto it = boot_reads_.find(ev.node);
+  if (it == boot_reads_.end() || ev.step != BootConfigEvent::Step::Done) {
+    emit(ev, wall_());
+    return;
+  }
+  const std::uint8_t node = ev.node;
+  const bool start = it->second;
+  // What the configurator would have done at its end, after the read.
+  auto conclude = [this, node, start](std::error_code failed, const std::string& detail) {
+    BootConfigEvent e;
+    e.node = node;
+    if (failed) {
+      e.step = BootConfigEvent::Step::Failed;
+      e.error = failed;
+      e.detail = "reading the PDO configuration: " + detail;
+      emit(e, wall_());
+      return;
+    }
+    if (start) {
+      nmt_.send_command(NmtCommand::Start, node);
+      e.step = BootConfigEvent::Step::Start;
+      emit(e, wall_());
+    }
+    e.step = BootConfigEvent::Step::Done;
+    e.detail = detail;
+    emit(e, wall_());
+  };
+  if (pdo_table_.description(node) == nullptr) {
+    conclude({}, "no EDS/DCF: PDO configuration not read");
+    return;
+  }
+  auto ec = read_pdo_config(
+      node,
+      [conclude](const pdo::PdoReadReport& r) {
+        if (r.cancelled) return;  // the node booted again: that boot-up's sequence runs
+        conclude(r.stopped, r.summary());
+      },
+      now_);
+  if (ec) conclude(ec, ec.message());
+}
+
+std::error_code Network::read_pdo_config(std::uint8_t node, pdo::PdoConfigReader::Done done, TimePoint now) {
+  const od::ObjectDictionary* description = pdo_table_.description(node);
+  if (description == nullptr) return make_error_code(SdoAbort::NoSuchObject);
+  std::vector<pdo::PdoReadPlan> plan;
+  for (const pdo::RemotePdo* p : pdo_table_.pdos(node)) {
+    pdo::PdoReadPlan step{p->key, {}};
+    for (const std::uint8_t sub : {std::uint8_t{3}, std::uint8_t{5}, std::uint8_t{6}})
+      if (description->find(pdo::comm_index(p->key.direction, p->key.number), sub) != nullptr)
+        step.optional_comm_subs.push_back(sub);
+    plan.push_back(std::move(step));
+  }
+  return pdo_reader_.read(
+      node, std::move(plan),
+      [this, node, done = std::move(done)](const pdo::PdoReadReport& r) {
+        if (!r.cancelled) {
+          for (const auto& o : r.pdos) {
+            if (o.parameters) {
+              if (pdo_table_.apply_read(node, o.key, *o.parameters)) refresh_pdo(node, o.key);
+            } else {
+              pdo_table_.set_read_error(node, o.key, o.detail);
+            }
+          }
+        }
+        if (done) done(r);
+      },
+      now);
+}
+
+void Network::refresh_pdo(std::uint8_t node, pdo::PdoKey key) {
+  auto cfg = pdo_table_.resolve(node, key);
+  const pdo::RemotePdo* raw = pdo_table_.find(node, key);
+  if (raw == nullptr) return;
+  if (key.direction == pdo::Direction::Transmit) {
+    if (cfg) {
+      (void)pdo_.set_tpdo(node, std::move(*cfg));
+    } else {
+      pdo::PdoConfig off;  // COB-ID and transmission type only: frames are reported, not decoded
+      off.direction = key.direction;
+      off.number = key.number;
+      off.comm = raw->parameters.comm;
+      (void)pdo_.set_tpdo(node, std::move(off), cfg.error().detail);
+    }
+    return;
+  }
+  // An RPDO that is disabled, an MPDO or not resolvable is not produced.
+  if (!cfg || !cfg->comm.cob_id.valid() || cfg->kind != pdo::MappingKind::Normal) {
+    rpdo_.remove(node, key.number);
+    return;
+  }
+  (void)rpdo_.reconfigure(node, std::move(*cfg), now_, pdo_table_.description(node));
 }
 
 void Network::configure_heartbeat_consumers() { nmt_.configure_consumers(own_); }

@@ -59,28 +59,43 @@ Result<CommParams> read_comm_params(const od::ObjectDictionary& od, Direction d,
   return p;
 }
 
-Result<PdoConfig> read_pdo(const od::ObjectDictionary& od, Direction d, std::uint16_t number, std::size_t max_bytes) {
+Result<PdoParameters> read_parameters(const od::ObjectDictionary& od, Direction d, std::uint16_t number) {
   auto comm = read_comm_params(od, d, number);
   if (!comm) return comm.error();
+  PdoParameters p;
+  p.comm = *comm;
+  const std::uint16_t midx = mapping_index(d, number);
+  auto count = od.get_unsigned(midx, 0);
+  if (!count) return fail(SdoAbort::NoSuchObject, pdo_label(d, number) + ": no mapping at " + hex(midx, 4) + "h");
+  p.count = static_cast<std::uint8_t>(*count);
+  if (const od::Object* m = od.find(midx)) {
+    for (const auto& [sub, e] : m->subs) {
+      if (sub == 0 || sub > kMaxMappedEntries) continue;
+      if (auto raw = od.get_unsigned(midx, sub)) p.entries[sub] = static_cast<std::uint32_t>(*raw);
+    }
+  }
+  return p;
+}
+
+Result<PdoConfig> resolve_pdo(Direction d, std::uint16_t number, const PdoParameters& parameters,
+                              const od::ObjectDictionary& od, std::size_t max_bytes) {
   PdoConfig cfg;
   cfg.direction = d;
   cfg.number = number;
-  cfg.comm = *comm;
-  const std::uint16_t midx = mapping_index(d, number);
+  cfg.comm = parameters.comm;
   const std::string label = pdo_label(d, number);
-  auto count = od.get_unsigned(midx, 0);
-  if (!count) return fail(SdoAbort::NoSuchObject, label + ": no mapping at " + hex(midx, 4) + "h");
-  if (*count == 0xFE) cfg.kind = MappingKind::SamMpdo;
-  if (*count == 0xFF) cfg.kind = MappingKind::DamMpdo;
+  const unsigned count = parameters.count;
+  if (count == 0xFE) cfg.kind = MappingKind::SamMpdo;
+  if (count == 0xFF) cfg.kind = MappingKind::DamMpdo;
   if (cfg.kind != MappingKind::Normal) return cfg;
-  if (*count > kMaxMappedEntries)
-    return fail(SdoAbort::PdoLengthExceeded, label + ": " + std::to_string(*count) + " mapped objects");
+  if (count > kMaxMappedEntries)
+    return fail(SdoAbort::PdoLengthExceeded, label + ": " + std::to_string(count) + " mapped objects");
   std::size_t bits = 0;
-  for (unsigned i = 1; i <= *count; ++i) {
-    auto raw = od.get_unsigned(midx, static_cast<std::uint8_t>(i));
+  for (unsigned i = 1; i <= count; ++i) {
+    const auto raw = parameters.entries.find(static_cast<std::uint8_t>(i));
     const std::string where = label + " entry " + std::to_string(i);
-    if (!raw) return fail(SdoAbort::NoSuchSubIndex, where + ": missing");
-    MappingEntry e = MappingEntry::from_raw(static_cast<std::uint32_t>(*raw));
+    if (raw == parameters.entries.end()) return fail(SdoAbort::NoSuchSubIndex, where + ": missing");
+    MappingEntry e = MappingEntry::from_raw(raw->second);
     if (e.bits == 0) return fail(SdoAbort::PdoLengthExceeded, where + ": length 0");
     if (e.index >= 0x0001 && e.index <= 0x0007 && e.sub == 0) {
       e.dummy = true;
@@ -105,6 +120,12 @@ Result<PdoConfig> read_pdo(const od::ObjectDictionary& od, Direction d, std::uin
     return fail(SdoAbort::PdoLengthExceeded, label + ": " + std::to_string(bits) + " bits exceed " +
                                                  std::to_string(max_bytes) + " bytes");
   return cfg;
+}
+
+Result<PdoConfig> read_pdo(const od::ObjectDictionary& od, Direction d, std::uint16_t number, std::size_t max_bytes) {
+  auto p = read_parameters(od, d, number);
+  if (!p) return p.error();
+  return resolve_pdo(d, number, *p, od, max_bytes);
 }
 
 std::vector<PdoConfig> read_all(const od::ObjectDictionary& od, Direction d, std::vector<std::string>* errors,

@@ -69,7 +69,14 @@ std::vector<std::string> PdoReceiver::add_node(std::uint8_t node, od::ObjectDict
   n.dict = std::move(dict);
   nodes_[node] = std::move(n);
   rebuild_claims();
-  for (const auto& p : nodes_[node].tpdos) {
+  auto conflicts = claim_conflicts(node);
+  problems.insert(problems.end(), conflicts.begin(), conflicts.end());
+  return problems;
+}
+
+std::vector<std::string> PdoReceiver::claim_conflicts(std::uint8_t node) const {
+  std::vector<std::string> problems;
+  for (const auto& p : nodes_.at(node).tpdos) {
     if (!p.comm.cob_id.valid()) continue;
     auto it = claims_.find(key(p.comm.cob_id));
     if (it != claims_.end() && it->second.node != node)
@@ -77,6 +84,18 @@ std::vector<std::string> PdoReceiver::add_node(std::uint8_t node, od::ObjectDict
                          " already used by node " + std::to_string(it->second.node));
   }
   return problems;
+}
+
+std::vector<std::string> PdoReceiver::set_tpdo(std::uint8_t node, PdoConfig cfg, std::string unusable) {
+  Node& n = nodes_[node];
+  const std::uint16_t number = cfg.number;
+  auto pos = std::find_if(n.tpdos.begin(), n.tpdos.end(), [&](const PdoConfig& p) { return p.number >= number; });
+  if (pos != n.tpdos.end() && pos->number == number) *pos = std::move(cfg);
+  else n.tpdos.insert(pos, std::move(cfg));
+  if (unusable.empty()) n.unusable.erase(number);
+  else n.unusable[number] = std::move(unusable);
+  rebuild_claims();  // claims index into tpdos
+  return claim_conflicts(node);
 }
 
 void PdoReceiver::remove_node(std::uint8_t node) {
@@ -124,7 +143,9 @@ bool PdoReceiver::on_frame(const can::Frame& f, TimePoint now) {
     ++dropped_late_;  // 7.2.2.2: synchronous PDOs belong to the window after SYNC
     return true;
   }
-  if (cfg.kind != MappingKind::Normal) {
+  if (auto bad = n.unusable.find(cfg.number); bad != n.unusable.end()) {
+    ev.error = "TPDO" + std::to_string(cfg.number) + " mapping cannot be decoded: " + bad->second;
+  } else if (cfg.kind != MappingKind::Normal) {
     decode_mpdo(it->second.node, cfg, f, ev);
   } else {
     const std::size_t want = cfg.byte_length();

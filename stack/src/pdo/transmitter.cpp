@@ -42,6 +42,49 @@ Result<std::size_t> PdoTransmitter::add(std::uint8_t node, PdoConfig cfg, TimePo
 
 void PdoTransmitter::remove(std::uint8_t node, std::uint16_t number) { pdos_.erase(Key{node, number}); }
 
+Result<std::size_t> PdoTransmitter::reconfigure(std::uint8_t node, PdoConfig cfg, TimePoint now,
+                                                const od::ObjectDictionary* initial) {
+  const std::uint16_t number = cfg.number;
+  std::optional<Tx> before;
+  if (Tx* old = find(node, number)) before = std::move(*old);
+  auto r = add(node, std::move(cfg), now);
+  if (!r) {
+    remove(node, number);
+    return r;
+  }
+  Tx& tx = *find(node, number);
+  std::size_t offset = 0;
+  for (const auto& e : tx.cfg.entries) {
+    if (!e.dummy) {
+      std::optional<std::size_t> was;
+      if (before) {
+        std::size_t at = 0;
+        for (const auto& o : before->cfg.entries) {
+          if (!o.dummy && o.index == e.index && o.sub == e.sub && o.bits == e.bits) was = at;
+          if (was) break;
+          at += o.bits;
+        }
+      }
+      if (was) {
+        for (unsigned b = 0; b < e.bits; b += 64) {
+          const unsigned n = std::min(64U, e.bits - b);
+          insert_bits(tx.payload, offset + b, n, extract_bits(before->payload, *was + b, n));
+        }
+      } else if (initial != nullptr) {
+        if (auto v = initial->get(e.index, e.sub)) (void)pack_value(*v, tx.payload, offset, e.bits);
+      }
+    }
+    offset += e.bits;
+  }
+  tx.sampled = tx.payload;
+  return r;
+}
+
+const PdoConfig* PdoTransmitter::config(std::uint8_t node, std::uint16_t number) const {
+  auto it = pdos_.find(Key{node, number});
+  return it == pdos_.end() ? nullptr : &it->second.cfg;
+}
+
 PdoTransmitter::Tx* PdoTransmitter::find(std::uint8_t node, std::uint16_t number) {
   auto it = pdos_.find(Key{node, number});
   return it == pdos_.end() ? nullptr : &it->second;

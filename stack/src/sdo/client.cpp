@@ -167,6 +167,7 @@ void SdoClient::complete(std::uint8_t node, std::error_code ec, Origin origin, s
     if (t.last_progress != done) t.job.req.on_progress(done, done);
   }
   if (t.job.upload && !ec) r.data = std::move(t.data);
+  if (!ec && !t.job.upload && download_observer_) download_observer_(node, t.mux, t.job.data);
   if (t.job.req.on_done) t.job.req.on_done(std::move(r));
   pump(node, now);
 }

@@ -13,6 +13,8 @@
 
 #include "canopen/can/memory_bus.hpp"
 
+#include "canopen/pdo/remote_config.hpp"
+
 namespace gateway {
 namespace {
 
@@ -274,6 +276,38 @@ TEST(AppDemo, ResetCommunicationOfTheOwnNodeRestoresItsHeartbeatTime) {
             200);
   ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
   EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
+}
+
+// Issue 11, the MQTT path (requests through handle_request, as the MQTT
+// front end sends them): the drive's TPDO2 remapped by SDO (CiA 301
+// 7.5.2.39) is published with the new mapping.
+TEST(AppDemo, TpdoRemappedBySdoRequestsIsPublishedWithTheNewMapping_7_5_2_39) {
+  DemoRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
+  const char* writes[] = {
+      R"({"index": "0x1801", "subIndex": 1, "value": 2147484293})",  // 80000285h: disable
+      R"({"index": "0x1A01", "subIndex": 0, "value": 0})",
+      R"({"index": "0x1A01", "subIndex": 1, "value": 1618411536})",  // 60770010h Torque actual value
+      R"({"index": "0x1A01", "subIndex": 0, "value": 1})",
+      R"({"index": "0x1801", "subIndex": 1, "value": 645})",  // 285h: enable
+  };
+  for (const char* w : writes) ASSERT_EQ(rig.request(RequestKind::SdoWrite, 5, w).status, 200) << w;
+  const auto mark = rig.events.size();
+  auto remapped = [&] {
+    for (std::size_t i = mark; i < rig.events.size(); ++i)
+      if (rig.events[i]->topic == "canopen/test/1/5/tpdo/2") return i;
+    return std::size_t{0};
+  };
+  ASSERT_TRUE(rig.run_until([&] { return remapped() != 0; }));
+  const auto ev = boost::json::parse(rig.events[remapped()]->json).as_object();
+  const auto& values = ev.at("values").as_array();
+  ASSERT_EQ(values.size(), 1U) << rig.events[remapped()]->json;
+  EXPECT_EQ(values[0].as_object().at("name"), "Torque actual value");
+  EXPECT_EQ(values[0].as_object().at("type"), "i16");
+  EXPECT_FALSE(ev.contains("error"));
+  const auto* t2 = rig.app->pdo_config(1)->find(5, {canopen::pdo::Direction::Transmit, 2});
+  ASSERT_NE(t2, nullptr);
+  EXPECT_EQ(t2->source, canopen::pdo::ConfigSource::Written);
 }
 
 TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {

@@ -42,6 +42,8 @@ const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
     {{"GET", "/api/v1/networks/{net}/nodes/{node}/od"}, {Role::Viewer, ""}},
     {{"GET", "/api/v1/networks/{net}/nodes/{node}/emcy"}, {Role::Viewer, ""}},
     {{"PUT", "/api/v1/networks/{net}/nodes/{node}/rpdo/{n}"}, {Role::Operator, R"({"raw":"0f00"})"}},
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/pdo"}, {Role::Viewer, ""}},
+    {{"POST", "/api/v1/networks/{net}/nodes/{node}/pdo/read"}, {Role::Operator, ""}},
     {{"POST", "/api/v1/networks/{net}/sync"}, {Role::Operator, "{}"}},
     {{"GET", "/api/v1/openapi.json"}, {Role::None, ""}},
     {{"GET", "/metrics"}, {Role::Viewer, ""}},

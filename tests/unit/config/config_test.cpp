@@ -145,7 +145,7 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
   EXPECT_EQ(config_error("networks:\n  - interface: can0\n    bitrat: 5\n"),
             "gw.yaml:3: networks[0].bitrat: unknown key (known here: interface, simulated, simulation, bitrate, node-id, "
             "heartbeat-ms, "
-            "sync, time, nodes)");
+            "sync, time, boot, nodes)");
   EXPECT_THAT(config_error("networks:\n  - bitrate: 500000\n"), HasSubstr("networks[0]: missing key 'interface'"));
   EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        eds: /nope.eds\n"),
               HasSubstr("gw.yaml:5: networks[0].nodes[0].eds: file '/nope.eds' not found"));
@@ -218,6 +218,29 @@ TEST(Config, HeartbeatConsumerIsAutoByDefaultZeroOrATime) {
   EXPECT_EQ(config_error(node + "1.5\n"),
             "gw.yaml:5: networks[0].nodes[0].heartbeat-consumer-ms: '1.5' is not a whole number");
   EXPECT_THAT(config_error(node + "[1]\n"), HasSubstr("heartbeat-consumer-ms: expected a single value"));
+}
+
+// Issue 11: boot: {read-pdo-config: true} per network (default for its
+// nodes, simulated ones included) and per node (wins).
+TEST(Config, ReadPdoConfigPerNetworkAndPerNode) {
+  const Config c = parse_config("networks:\n  - interface: can0\n    boot: {read-pdo-config: true}\n    nodes:\n"
+                                "      - {id: 5, eds: " + kEds + ", boot: {start: true}}\n"
+                                "      - {id: 6, eds: " + kEds + ", boot: {read-pdo-config: false}}\n"
+                                "  - simulated: true\n    boot: {read-pdo-config: true}\n"
+                                "  - interface: can1\n    nodes:\n      - {id: 7, eds: " + kIo +
+                                ", boot: {read-pdo-config: true}}\n",
+                                "gw.yaml");
+  ASSERT_EQ(c.networks.size(), 3U);
+  EXPECT_TRUE(c.networks[0].read_pdo_config);
+  EXPECT_FALSE(c.networks[0].nodes[0].boot->read_pdo_config.has_value()) << "the network's applies";
+  EXPECT_EQ(c.networks[0].nodes[1].boot->read_pdo_config, false);
+  EXPECT_TRUE(c.networks[1].read_pdo_config);
+  EXPECT_FALSE(c.networks[2].read_pdo_config);
+  EXPECT_EQ(c.networks[2].nodes[0].boot->read_pdo_config, true);
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - {id: 5, boot: {read-pdo-config: true}}\n"),
+              HasSubstr("read-pdo-config: true needs an eds or dcf file"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    boot: {start: true}\n"),
+              HasSubstr("networks[0].boot.start: unknown key"));
 }
 
 TEST(Config, FlagsWinOverTheFile) {

@@ -37,9 +37,11 @@ struct RestRig {
   // `configure` may change the demo configuration (e.g. turn auth on with
   // tokens). The rate limit is off unless it sets one. The log goes to
   // `log_to` (default stderr, errors only; given: info and up, for audit
-  // lines); `static_dir` serves a dashboard.
+  // lines); `static_dir` serves a dashboard. `before_start` runs after the
+  // App is built and before it starts (e.g. to change a simulated device).
   explicit RestRig(std::chrono::milliseconds emcy_period = {}, const std::function<void(Config&)>& configure = {},
-                   std::FILE* log_to = nullptr, const std::filesystem::path& static_dir = {}) {
+                   std::FILE* log_to = nullptr, const std::filesystem::path& static_dir = {},
+                   const std::function<void(App&)>& before_start = {}) {
     CliOptions cli;
     cli.demo = true;
     cli.gateway_id = "test";
@@ -57,6 +59,7 @@ struct RestRig {
     // The authorizer as canopen-gateway installs it (demo: auth off, everyone admin).
     server->set_authorizer(app->http_authorizer());
     register_api_routes(*server, *app);
+    if (before_start) before_start(*app);
     app->start();
     server->start();
     port = server->bound_port();

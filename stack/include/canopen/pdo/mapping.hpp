@@ -11,6 +11,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <span>
 #include <string>
@@ -81,6 +82,18 @@ struct PdoConfig {
   std::size_t byte_length() const { return (total_bits() + 7) / 8; }  // MPDO: 8
 };
 
+// The raw values of one PDO's two records (7.5.2.35-7.5.2.38 / 7.5.2.37,
+// 7.5.2.39) as a device holds them, before the mapping is resolved against a
+// dictionary: what the gateway tracks for a remote node whose PDOs are
+// changed at run time (pdo/remote_config.hpp).
+struct PdoParameters {
+  CommParams comm;
+  std::uint8_t count = 0;  // mapping sub 0 (FEh / FFh: MPDO)
+  // Mapping sub 1..64 as far as known; only 1..count are used, the rest is
+  // kept because the remapping sequence sets sub 0 last.
+  std::map<std::uint8_t, std::uint32_t> entries;
+};
+
 // Reads sub 1..6 of the communication record (missing optional subs keep
 // their defaults). NoSuchObject when the record or its COB-ID is absent.
 Result<CommParams> read_comm_params(const od::ObjectDictionary& od, Direction d, std::uint16_t number);
@@ -90,6 +103,15 @@ Result<CommParams> read_comm_params(const od::ObjectDictionary& od, Direction d,
 // classic, 64 FD); errors name the offending entry.
 Result<PdoConfig> read_pdo(const od::ObjectDictionary& od, Direction d, std::uint16_t number,
                            std::size_t max_bytes = 8);
+// The raw records of a PDO from a dictionary (comm params as above, mapping
+// sub 0 and every mapping sub 1..64 present). NoSuchObject when either
+// record or the COB-ID is absent.
+Result<PdoParameters> read_parameters(const od::ObjectDictionary& od, Direction d, std::uint16_t number);
+// Resolves raw parameters against `description`, the dictionary that knows
+// the mapped objects' types and names, with read_pdo()'s checks. read_pdo()
+// is read_parameters() + resolve_pdo() on one dictionary.
+Result<PdoConfig> resolve_pdo(Direction d, std::uint16_t number, const PdoParameters& parameters,
+                              const od::ObjectDictionary& description, std::size_t max_bytes = 8);
 // Every PDO of a direction whose communication record exists, in number order.
 // PDOs that fail read_pdo() are returned in `errors` as "TPDO3: reason".
 std::vector<PdoConfig> read_all(const od::ObjectDictionary& od, Direction d, std::vector<std::string>* errors = nullptr,

@@ -3,8 +3,8 @@
 //
 // Sans-I/O. The caller MUST
 //   - add each remote node with its dictionary (EDS/DCF) before its PDOs
-//     arrive, and add it again after changing its PDO configuration (the
-//     configuration is read once, at add_node());
+//     arrive (the configuration is read once, at add_node()), and pass a
+//     TPDO whose configuration changed on the device to set_tpdo();
 //   - pass received frames to on_frame() (frames that are not PDOs are left
 //     alone and on_frame() returns false, so handing it the whole bus is fine).
 //
@@ -16,6 +16,9 @@
 //   - A standard-ID data frame in the PDO ranges of the pre-defined
 //     connection set (181h-57Fh, function codes 0011b-1010b) that no node
 //     claims gives a PdoEvent with node 0, number 0 and only raw bytes.
+//   - A TPDO set with an `unusable` reason (its mapping does not resolve)
+//     keeps its COB-ID: its frames give a PdoEvent with node, number, raw
+//     bytes and that reason in `error`, never values.
 //   - Synchronous TPDOs (transmission type 0-240) received when the
 //     sync-window hook says "outside" are dropped and counted.
 //   - RTR frames are never consumed (they are requests, not data).
@@ -83,6 +86,12 @@ class PdoReceiver {
   // decoded, a COB-ID already claimed by another node); the rest still works.
   std::vector<std::string> add_node(std::uint8_t node, od::ObjectDictionary dict);
   void remove_node(std::uint8_t node);
+  // Replaces (or adds) node's TPDO cfg.number, e.g. after the device was
+  // remapped; a COB-ID with bit 31 set takes it off the bus. A non-empty
+  // `unusable` (why the mapping cannot be decoded) keeps the COB-ID
+  // claimed but decodes nothing (see above). Returns problems as
+  // add_node(). The node need not have been added (no MPDO typing then).
+  std::vector<std::string> set_tpdo(std::uint8_t node, PdoConfig cfg, std::string unusable = {});
   // Dispatcher list of the gateway's own dictionary; call again after it changes.
   void set_dispatcher_list(const od::ObjectDictionary& local);
   void set_sync_window(SyncWindow in_window) { in_window_ = std::move(in_window); }
@@ -99,13 +108,14 @@ class PdoReceiver {
 
   std::uint64_t dropped_late() const { return dropped_late_; }
   // The configuration in use for node's TPDO `number`, if any; valid until
-  // the next add_node()/remove_node().
+  // the next add_node()/remove_node()/set_tpdo().
   const PdoConfig* tpdo(std::uint8_t node, std::uint16_t number) const;
 
  private:
   struct Node {
     od::ObjectDictionary dict;
-    std::vector<PdoConfig> tpdos;
+    std::vector<PdoConfig> tpdos;                   // in number order
+    std::map<std::uint16_t, std::string> unusable;  // TPDO number -> why it is not decoded
     std::vector<ScannerEntry> scanner;
   };
   struct Claim {
@@ -114,6 +124,7 @@ class PdoReceiver {
   };
   static std::uint64_t key(const CobId& c) { return std::uint64_t{c.can_id()} | (c.extended() ? 1ULL << 32 : 0); }
   void rebuild_claims();
+  std::vector<std::string> claim_conflicts(std::uint8_t node) const;
   void decode_mpdo(std::uint8_t owner, const PdoConfig& cfg, const can::Frame& f, PdoEvent& ev) const;
 
   FrameSink sink_;

@@ -65,6 +65,17 @@ class PdoTransmitter {
   // The same from a ready configuration; the payload starts zeroed.
   Result<std::size_t> add(std::uint8_t node, PdoConfig cfg, TimePoint now);
   void remove(std::uint8_t node, std::uint16_t number);
+  // The PDO's configuration changed on the device (7.5.2.35-7.5.2.38):
+  // replaces it like add(), but objects mapped before and after keep their
+  // latest values; objects newly mapped start with their value in
+  // `initial` (the node's description) when given, else 0. A configuration
+  // add() refuses (COB-ID bit 31 set, MPDO) removes the PDO and returns
+  // that error. Nothing is sent.
+  Result<std::size_t> reconfigure(std::uint8_t node, PdoConfig cfg, TimePoint now,
+                                  const od::ObjectDictionary* initial = nullptr);
+  // The configuration in use for node's PDO `number`; nullptr when none.
+  // Valid until the next add/reconfigure/remove.
+  const PdoConfig* config(std::uint8_t node, std::uint16_t number) const;
 
   // NoSuchObject: PDO not added; NotMappable: index/sub not in its mapping;
   // LengthMismatch: the value's type is not the mapped type. Nothing changes

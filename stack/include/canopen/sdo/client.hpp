@@ -206,6 +206,15 @@ class SdoClient {
   // `now` (false while it counts as refusing block transfer).
   bool block_allowed(std::uint8_t node, TimePoint now) const;
 
+  // Called after every successful download, before its completion handler,
+  // with the node, the object and the bytes written: lets a service follow
+  // what this client changed on a node (Network: the PDO decoder follows a
+  // node's PDO parameters). One observer; it must not call back into the
+  // client.
+  using DownloadObserver =
+      std::function<void(std::uint8_t node, const Multiplexer& mux, const Bytes& data)>;
+  void set_download_observer(DownloadObserver observer) { download_observer_ = std::move(observer); }
+
   // Requests of the node: waiting plus running.
   std::size_t pending(std::uint8_t node) const;
   bool busy(std::uint8_t node) const;
@@ -303,6 +312,7 @@ class SdoClient {
   std::vector<std::uint8_t> running_; // nodes with an active transfer
   RequestId next_id_ = 1;
   std::uint64_t stray_aborts_ = 0;
+  DownloadObserver download_observer_;
 };
 
 }  // namespace canopen::sdo
