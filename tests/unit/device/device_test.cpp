@@ -24,17 +24,21 @@ std::string source_path(const char* rel) { return std::string(CANOPEN_SOURCE_DIR
 struct Rig {
   explicit Rig(const char* eds = "deploy/eds/cia402-drive.eds")
       : od(eds::load_device_description(source_path(eds), kNode).od) {}
+  Rig(od::ObjectDictionary dictionary, std::uint8_t node) : node_id(node), od(std::move(dictionary)) {}
 
   void make() {
     DeviceConfig cfg;
-    cfg.node_id = kNode;
+    cfg.node_id = node_id;
     cfg.time_period = time_period;
     if (time_period > Duration::zero()) cfg.unix_ms = [] { return std::int64_t{1'700'000'000'000}; };
     dev = std::make_unique<Device>(od, cfg, [this](const can::Frame& f) { dev_ep->send(f); }, cb);
     dev_ep->on_frames([this](std::span<const can::Frame> fs) {
       for (const auto& f : fs) dev->on_frame(f, clock.now());
     });
-    tester->on_frames([this](std::span<const can::Frame> fs) { rx.insert(rx.end(), fs.begin(), fs.end()); });
+    tester->on_frames([this](std::span<const can::Frame> fs) {
+      rx.insert(rx.end(), fs.begin(), fs.end());
+      rx_times.insert(rx_times.end(), fs.size(), clock.now());
+    });
     dev->start(clock.now());
     bus.deliver();
   }
@@ -42,7 +46,7 @@ struct Rig {
     tester->send(f);
     bus.deliver();
   }
-  void nmt(NmtCommand cs) { send(can::Frame::standard(0x000, {static_cast<std::uint8_t>(cs), kNode})); }
+  void nmt(NmtCommand cs) { send(can::Frame::standard(0x000, {static_cast<std::uint8_t>(cs), node_id})); }
   // Runs the device's timers until now + d.
   void run_for(Duration d) {
     const TimePoint end = clock.now() + d;
@@ -59,14 +63,18 @@ struct Rig {
   // Expedited SDO download; returns the server's command byte (60h ok, 80h abort).
   std::uint8_t sdo_write(std::uint16_t index, std::uint8_t sub, std::uint32_t value, unsigned size) {
     const std::uint8_t cs = size == 1 ? 0x2F : size == 2 ? 0x2B : 0x23;
-    rx.clear();
-    send(can::Frame::standard(0x600 + kNode,
+    clear();
+    send(can::Frame::standard(0x600U + node_id,
                               {cs, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub,
                                static_cast<std::uint8_t>(value), static_cast<std::uint8_t>(value >> 8),
                                static_cast<std::uint8_t>(value >> 16), static_cast<std::uint8_t>(value >> 24)}));
     for (const auto& f : rx)
-      if (f.id == 0x580U + kNode) return f.data[0];
+      if (f.id == 0x580U + node_id) return f.data[0];
     return 0;
+  }
+  void clear() {
+    rx.clear();
+    rx_times.clear();
   }
   std::vector<can::Frame> frames(std::uint32_t id) const {
     std::vector<can::Frame> out;
@@ -76,6 +84,7 @@ struct Rig {
   }
   std::uint64_t u(std::uint16_t index, std::uint8_t sub) const { return od.get_unsigned(index, sub).value_or(~0ULL); }
 
+  std::uint8_t node_id = kNode;
   FakeClock clock;
   can::MemoryBus bus;
   std::unique_ptr<can::MemoryEndpoint> dev_ep = bus.attach("device");
@@ -85,6 +94,7 @@ struct Rig {
   Duration time_period{};
   std::unique_ptr<Device> dev;
   std::vector<can::Frame> rx;
+  std::vector<TimePoint> rx_times;  // receive time of each frame in rx
 };
 
 Value u16(std::uint64_t v) { return Value::of_unsigned(DataType::Unsigned16, v); }
@@ -443,87 +453,37 @@ TEST(Device, GatewayDictionary_7_2_8_3_3_TheGatewaysOwnNodeBootsAndServesSdo) {
 // The gateway's own node as the gateway sets it up: its dictionary
 // configured before start() (heartbeat 100 ms from the configuration), an
 // application parameter at 2100h, 1010h/1011h wired to the Device.
-struct OwnNode {
+struct OwnNode : Rig {
   static constexpr std::uint8_t kId = 127;
   static constexpr std::uint32_t kSave = 0x65766173;  // "save", 7.5.2.13 figure 55
   static constexpr std::uint32_t kLoad = 0x64616F6C;  // "load", 7.5.2.14 figure 57
+  static constexpr std::uint8_t kOk = 0x60;           // SDO download response
 
-  OwnNode() {
-    od::GatewayDictionaryOptions o;
-    o.on_store = [this](std::uint8_t sub) { return dev->store_parameters(sub); };
-    o.on_restore = [this](std::uint8_t sub) { return dev->restore_default_parameters(sub); };
-    od = od::make_gateway_dictionary(kId, {}, o);
+  OwnNode() : Rig(dictionary(this), kId) {
     od.insert(od::make_var(0x2100, "Application parameter", DataType::Unsigned16, od::Access::ReadWrite, u16(7)));
     EXPECT_FALSE(od.write(0x1017, 0, encode(u16(100))));
-    DeviceConfig cfg;
-    cfg.node_id = kId;
-    dev = std::make_unique<Device>(od, cfg, [this](const can::Frame& f) { ep->send(f); });
-    ep->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs) dev->on_frame(f, clock.now());
-    });
-    peer->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs) rx.emplace_back(clock.now(), f);
-    });
-    dev->start(clock.now());
-    bus.deliver();
+    make();
   }
-  void send(const can::Frame& f) {
-    peer->send(f);
-    bus.deliver();
-  }
-  void nmt(NmtCommand cs) { send(can::Frame::standard(0x000, {static_cast<std::uint8_t>(cs), kId})); }
-  void run_for(Duration d) {
-    const TimePoint end = clock.now() + d;
-    for (;;) {
-      bus.deliver();
-      const TimePoint next = dev->next_deadline();
-      if (next > end) break;
-      if (next > clock.now()) clock.advance_to(next);
-      dev->on_time(clock.now());
-    }
-    clock.advance_to(end);
-    bus.deliver();
-  }
-  // Expedited SDO download of `size` bytes; true when the server confirmed it.
-  bool sdo_write(std::uint16_t index, std::uint8_t sub, std::uint32_t value, unsigned size) {
-    const std::uint8_t cs = size == 1 ? 0x2F : size == 2 ? 0x2B : 0x23;
-    rx.clear();
-    send(can::Frame::standard(0x600 + kId,
-                              {cs, static_cast<std::uint8_t>(index), static_cast<std::uint8_t>(index >> 8), sub,
-                               static_cast<std::uint8_t>(value), static_cast<std::uint8_t>(value >> 8),
-                               static_cast<std::uint8_t>(value >> 16), static_cast<std::uint8_t>(value >> 24)}));
-    run_for(0ms);
-    for (const auto& [t, f] : rx)
-      if (f.id == 0x580U + kId) return f.data[0] == 0x60;
-    return false;
+  static od::ObjectDictionary dictionary(Rig* rig) {
+    od::GatewayDictionaryOptions o;
+    o.on_store = [rig](std::uint8_t sub) { return rig->dev->store_parameters(sub); };
+    o.on_restore = [rig](std::uint8_t sub) { return rig->dev->restore_default_parameters(sub); };
+    return od::make_gateway_dictionary(kId, {}, o);
   }
   // Spacing of the heartbeats (not boot-ups) the node sends during d.
   std::vector<Duration> heartbeat_gaps(Duration d) {
-    rx.clear();
+    clear();
     run_for(d);
     std::vector<Duration> gaps;
     std::optional<TimePoint> last;
-    for (const auto& [t, f] : rx) {
-      if (f.id != 0x700U + kId || f.data[0] == 0x00) continue;
-      if (last) gaps.push_back(t - *last);
-      last = t;
+    for (std::size_t i = 0; i < rx.size(); ++i) {
+      if (rx[i].id != 0x700U + kId || rx[i].data[0] == 0x00) continue;
+      if (last) gaps.push_back(rx_times[i] - *last);
+      last = rx_times[i];
     }
     return gaps;
   }
-  std::size_t count(std::uint32_t id) const {
-    std::size_t n = 0;
-    for (const auto& [t, f] : rx) n += f.id == id ? 1 : 0;
-    return n;
-  }
-  std::uint64_t u(std::uint16_t index, std::uint8_t sub) const { return od.get_unsigned(index, sub).value_or(~0ULL); }
-
-  FakeClock clock;
-  can::MemoryBus bus;
-  std::unique_ptr<can::MemoryEndpoint> ep = bus.attach("gateway");
-  std::unique_ptr<can::MemoryEndpoint> peer = bus.attach("peer");
-  od::ObjectDictionary od;
-  std::unique_ptr<Device> dev;
-  std::vector<std::pair<TimePoint, can::Frame>> rx;
+  std::size_t count(std::uint32_t id) const { return frames(id).size(); }
 };
 
 using Gaps = std::vector<Duration>;
@@ -531,10 +491,10 @@ using Gaps = std::vector<Duration>;
 // Written since power-on: a slower heartbeat, a produced SYNC (1005h bit 30,
 // 1006h 10 ms) and the application parameter.
 void reconfigure_over_sdo(OwnNode& n) {
-  ASSERT_TRUE(n.sdo_write(0x1017, 0, 300, 2));
-  ASSERT_TRUE(n.sdo_write(0x1006, 0, 10'000, 4));
-  ASSERT_TRUE(n.sdo_write(0x1005, 0, 0x40000080, 4));
-  ASSERT_TRUE(n.sdo_write(0x2100, 0, 42, 2));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1017, 0, 300, 2));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1006, 0, 10'000, 4));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1005, 0, 0x40000080, 4));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x2100, 0, 42, 2));
   EXPECT_EQ(n.heartbeat_gaps(1000ms), (Gaps{300ms, 300ms}));
   EXPECT_GE(n.count(0x080), 90U) << "SYNC every 10 ms";
 }
@@ -566,21 +526,21 @@ TEST(Device, OwnNode_7_3_2_2_1_ResetNodeAlsoSetsTheApplicationAreaToPowerOnValue
 
 TEST(Device, OwnNode_7_5_2_13_SavedValuesAreThePowerOnValuesUntil1011hLoadAndAReset) {
   OwnNode n;
-  ASSERT_TRUE(n.sdo_write(0x1017, 0, 300, 2));
-  ASSERT_TRUE(n.sdo_write(0x1010, 2, OwnNode::kSave, 4));  // save communication parameters
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1017, 0, 300, 2));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1010, 2, OwnNode::kSave, 4));  // save communication parameters
   n.nmt(NmtCommand::ResetCommunication);
   EXPECT_EQ(n.u(0x1017, 0), 300U);
   EXPECT_EQ(n.heartbeat_gaps(700ms), (Gaps{300ms}));
   // 7.5.2.14: the defaults take effect at the next reset, not at once.
-  ASSERT_TRUE(n.sdo_write(0x1011, 2, OwnNode::kLoad, 4));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1011, 2, OwnNode::kLoad, 4));
   EXPECT_EQ(n.u(0x1017, 0), 300U);
   n.nmt(NmtCommand::ResetCommunication);
   EXPECT_EQ(n.u(0x1017, 0), 100U);
   EXPECT_EQ(n.heartbeat_gaps(350ms), (Gaps{100ms, 100ms}));
   // Group 3 (application) saved alone leaves the communication area at its power-on values.
-  ASSERT_TRUE(n.sdo_write(0x2100, 0, 42, 2));
-  ASSERT_TRUE(n.sdo_write(0x1017, 0, 300, 2));
-  ASSERT_TRUE(n.sdo_write(0x1010, 3, OwnNode::kSave, 4));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x2100, 0, 42, 2));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1017, 0, 300, 2));
+  ASSERT_EQ(OwnNode::kOk, n.sdo_write(0x1010, 3, OwnNode::kSave, 4));
   n.nmt(NmtCommand::ResetNode);
   EXPECT_EQ(n.u(0x2100, 0), 42U);
   EXPECT_EQ(n.u(0x1017, 0), 100U);
