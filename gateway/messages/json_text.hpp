@@ -13,8 +13,8 @@
 
 namespace gateway::detail {
 
-// True when s is well-formed UTF-8 (no overlongs, surrogates or > U+10FFFF).
-bool is_utf8(std::string_view s);
+// True when s is well-formed UTF-8 (canopen/types.hpp).
+using canopen::is_utf8;
 // s when it is UTF-8, otherwise s read as Latin-1 (as json_value.hpp does
 // for VISIBLE_STRING), so protobuf string fields and JSON stay valid.
 std::string to_utf8(std::string_view s);

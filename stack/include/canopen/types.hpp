@@ -140,6 +140,9 @@ Result<Value> decode(DataType type, std::span<const std::uint8_t> bytes);
 Result<Value> parse_value(DataType type, std::string_view text);
 std::string format_value(const Value& v);
 
+// True when s is well-formed UTF-8 (no overlongs, surrogates or code
+// points above U+10FFFF). Does not allocate.
+bool is_utf8(std::string_view s);
 // Bytes read as Latin-1 (ISO 8859-1), written as UTF-8: how text that is not
 // valid UTF-8 (vendor files, device strings) is turned into valid JSON and
 // protobuf strings. Callers check for valid UTF-8 first and keep such text

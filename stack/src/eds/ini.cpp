@@ -78,7 +78,7 @@ std::size_t first_non_utf8_line(std::string_view text) {
   while (start < text.size()) {
     const auto nl = text.find('\n', start);
     const auto end = nl == std::string_view::npos ? text.size() : nl;
-    if (!parse_value(DataType::UnicodeString, text.substr(start, end - start)).ok()) return line;
+    if (!is_utf8(text.substr(start, end - start))) return line;
     start = end + 1;
     ++line;
   }
@@ -94,7 +94,7 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
   // degree signs). Such a file is read as Latin-1 so every name is valid
   // UTF-8 for JSON and protobuf.
   std::string converted;
-  if (!parse_value(DataType::UnicodeString, text).ok()) {
+  if (!is_utf8(text)) {
     diag.warn(first_non_utf8_line(text), "text is not UTF-8; the file is read as Latin-1 (ISO 8859-1)");
     converted = latin1_to_utf8(text);
     text = converted;

@@ -69,11 +69,9 @@ json::value non_finite(double d) {
   return json::string(d < 0 ? "-inf" : "inf");
 }
 
-bool is_valid_utf8(const std::string& s) { return parse_value(DataType::UnicodeString, s).ok(); }
-
 // VISIBLE_STRING bytes as JSON text: UTF-8 as is, anything else as Latin-1,
 // so the serialized JSON is always valid.
-std::string visible_to_utf8(const std::string& s) { return is_valid_utf8(s) ? s : latin1_to_utf8(s); }
+std::string visible_to_utf8(const std::string& s) { return is_utf8(s) ? s : latin1_to_utf8(s); }
 
 // Numbers in JSON strings: decimal or 0x hex. Leading zeros are decimal
 // ("010" is 10), unlike EDS text where they mean octal.
