@@ -257,16 +257,7 @@ void Builder::warn_once(const std::string& kind, std::size_t line, const std::st
 }
 
 std::uint64_t Builder::number(const IniEntry& e, DataType t) {
-  auto r = parse_value(t, e.value);
-  if (!r) {
-    std::string what;
-    if (auto bare = bare_number(e.value, &what)) {
-      if (auto again = parse_value(t, *bare)) {
-        warn_once("bare:" + e.lkey, e.line, e.key + "=" + e.value + ": " + what + " ignored");
-        r = std::move(again);
-      }
-    }
-  }
+  const auto r = parse_lenient(e, e.value, t, e.key);
   if (!r) d_.fail(e.line, invalid(e.key, e.value, t, r.error().detail));
   if (t == DataType::Boolean) return std::get<bool>(r->data) ? 1 : 0;
   return std::get<std::uint64_t>(r->data);
