@@ -472,15 +472,10 @@ Config merge(Config c, const CliOptions& cli) {
   for (const auto& e : cli.eds) {
     std::error_code ec;
     if (!fs::is_regular_file(e.file, ec)) throw ConfigError("--eds " + std::to_string(e.node) + "=" + e.file + ": file not found");
-    // Read now, with the rules every other path uses, so a file that no
-    // network takes (--demo alone) is still checked.
-    try {
-      (void)canopen::eds::load_device_description(e.file, static_cast<std::uint8_t>(e.node));
-    } catch (const canopen::eds::EdsError& err) {
-      throw ConfigError("--eds " + std::to_string(e.node) + "=" + e.file + ": " + err.what());
-    }
+    bool taken = false;  // by a real network, whose App reads it at start
     for (auto& net : c.networks) {
       if (net.simulated) continue;
+      taken = true;
       auto it = std::find_if(net.nodes.begin(), net.nodes.end(), [&](const NodeConfig& n) { return n.id == e.node; });
       if (it == net.nodes.end()) {
         NodeConfig n;
@@ -489,6 +484,15 @@ Config merge(Config c, const CliOptions& cli) {
         it = net.nodes.end() - 1;
       }
       it->eds = e.file;
+    }
+    // A file no network takes (--demo alone) is read here, with the same
+    // rules, so it is checked all the same.
+    if (!taken) {
+      try {
+        (void)canopen::eds::load_device_description(e.file, static_cast<std::uint8_t>(e.node));
+      } catch (const canopen::eds::EdsError& err) {
+        throw ConfigError("--eds " + std::to_string(e.node) + "=" + e.file + ": " + err.what());
+      }
     }
   }
   if (cli.mqtt_uri) {
