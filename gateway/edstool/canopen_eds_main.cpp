@@ -92,7 +92,7 @@ int check(const Args& a) {
 int show(const Args& a) {
   const auto& file = a.files.front();
   try {
-    const auto d = canopen::eds::load_device_description(file, a.node_id, 1);
+    const auto d = canopen::eds::load_device_description(file, a.node_id, gateway::edstool::kFallbackNodeId);
     for (const auto& w : d.warnings) std::cerr << gateway::edstool::warning_line(file, w) << '\n';
     std::cout << boost::json::serialize(gateway::edstool::dictionary_json(d)) << '\n';
     return 0;

@@ -11,10 +11,6 @@ namespace json = boost::json;
 
 namespace {
 
-// $NODEID in a file checked with no node in mind: any valid node-ID shows
-// whether the expressions are well formed.
-constexpr std::uint8_t kFallbackNodeId = 1;
-
 json::value optional_value(const std::optional<canopen::Value>& v) {
   if (!v) return nullptr;
   return canopen::value_to_json(*v);

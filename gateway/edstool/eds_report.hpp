@@ -21,6 +21,10 @@
 
 namespace gateway::edstool {
 
+// $NODEID in a file looked at with no node in mind (no --node-id, no DCF
+// NodeID): any valid node-ID shows whether the expressions are well formed.
+constexpr std::uint8_t kFallbackNodeId = 1;
+
 struct CheckResult {
   bool accepted = false;
   std::vector<std::string> lines;  // what `canopen-eds check` prints for the file, in order
