@@ -459,11 +459,15 @@ void rpdo(App& app, const Request& req, Responder respond) {
 
 // ---- PDO configuration in effect (issue 11) ----------------------------------
 
+const char* direction_text(canopen::pdo::Direction d) {
+  return d == canopen::pdo::Direction::Transmit ? "tpdo" : "rpdo";
+}
+
 json::object pdo_json(const canopen::pdo::RemotePdo& p, const canopen::Result<canopen::pdo::PdoConfig>& cfg) {
   using canopen::pdo::Direction;
   const auto& c = p.parameters.comm;
   json::object o;
-  o["direction"] = p.key.direction == Direction::Transmit ? "tpdo" : "rpdo";
+  o["direction"] = direction_text(p.key.direction);
   o["number"] = p.key.number;
   o["commIndex"] = canopen::pdo::comm_index(p.key.direction, p.key.number);
   o["mappingIndex"] = canopen::pdo::mapping_index(p.key.direction, p.key.number);
@@ -561,15 +565,13 @@ void read_pdo(App& app, const Request& req, Responder respond) {
         json::array read;
         for (const auto& p : r.pdos) {
           json::object o;
-          o["direction"] = p.key.direction == canopen::pdo::Direction::Transmit ? "tpdo" : "rpdo";
+          o["direction"] = direction_text(p.key.direction);
           o["number"] = p.key.number;
           o["ok"] = p.parameters.has_value();
           if (!p.parameters) {
             o["error"] = p.detail;
             if (&p.error.category() == &canopen::sdo_abort_category()) {
-              char code[16];
-              std::snprintf(code, sizeof code, "0x%08X", static_cast<unsigned>(p.error.value()));
-              o["abortCode"] = code;
+              o["abortCode"] = detail::abort_code_text(static_cast<std::uint32_t>(p.error.value()));
             }
           }
           read.push_back(std::move(o));
