@@ -3,10 +3,10 @@
 // NMT master (boot-up, heartbeat consumer, node guarding), EMCY, SYNC and
 // TIME consumers. Invariants: the master only ever sends node
 // guarding RTRs for the guarded node; events name nodes 1..127; a node is
-// reported lost only if it is monitored: a heartbeat-consumed node only
-// after it was heard (monitoring starts with the first heartbeat), a guarded
-// node also when it never answered the polls; nothing crashes, leaks or
-// hits UB. A decoded PDO never carries more values than its mapping has
+// reported lost only after it was heard (a consumed node and, with
+// monitoring without configuration, any node the master hears: watching
+// starts with its first heartbeat), the guarded node also when it never
+// answered the polls; nothing crashes, leaks or hits UB. A decoded PDO never carries more values than its mapping has
 // entries, and claimed PDOs name node 5.
 // fuzz-libs: canopen_nmt canopen_emcy canopen_pdo
 #include <cstddef>
@@ -50,7 +50,7 @@ const canopen::od::ObjectDictionary& io_module() {
 // (selector >> 2) * 23 ms; bits 4-7: length (clamped to 8).
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   bool bad = false;
-  std::set<std::uint8_t> seen, monitored{3, 5, kGuarded};
+  std::set<std::uint8_t> seen;
   auto check_node = [&](std::uint8_t node) {
     if (node < 1 || node > 127) bad = true;
   };
@@ -61,8 +61,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       [&](const canopen::EventBody& body, canopen::can::Frame::Clock::time_point) {
         if (const auto* s = std::get_if<canopen::NodeStateEvent>(&body)) {
           check_node(s->node);
-          if (s->cause == canopen::NodeStateEvent::Cause::Lost &&
-              (!monitored.contains(s->node) || (s->node != kGuarded && !seen.contains(s->node))))
+          if (s->cause == canopen::NodeStateEvent::Cause::Lost && s->node != kGuarded && !seen.contains(s->node))
             bad = true;
           if (s->cause != canopen::NodeStateEvent::Cause::Lost) seen.insert(s->node);
         } else if (const auto* h = std::get_if<canopen::HeartbeatEvent>(&body)) {
