@@ -937,8 +937,9 @@ void App::submitted(Net& n, const canopen::Result<canopen::sdo::RequestId>& id, 
 std::optional<ApiReply> App::take_sdo_place(const Net& n, const ApiRequest& req, const ReplyOptions& opts) {
   if (sdo_shares_.take(sdo_queue_key(n.number, req.node), req.caller)) return std::nullopt;
   ++counters_.sdo_share_refused;
+  const std::string who = req.caller.empty() ? std::string("this caller") : req.caller;
   auto r = problem(429,
-                   (req.caller.empty() ? std::string("this caller") : req.caller) + " has " + std::to_string(sdo_shares_.share()) + " SDO requests waiting for node " +
+                   who + " has " + std::to_string(sdo_shares_.share()) + " SDO requests waiting for node " +
                        std::to_string(req.node) + " already, its share of the node's queue of " +
                        std::to_string(kSdoQueueLimit) + "; send more once one is answered (other callers still get in)",
                    opts);

@@ -7,6 +7,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <functional>
 #include <optional>
 #include <vector>
@@ -97,7 +98,8 @@ TEST(AppRequests, OneCallerFillsItsShareOfASilentNodesQueueOthersStillGetIn) {
   const std::size_t share = auth::caller_share(canopen::sdo::ClientConfig{}.queue_limit);
   ASSERT_EQ(share, 8u);  // max(2, 32 / 4)
   std::vector<std::shared_ptr<std::optional<ApiReply>>> mine;
-  for (std::size_t i = 0; i < share; ++i) mine.push_back(rig.send(from_http(read_request(kSilent), "address 10.0.0.7")));
+  for (std::size_t i = 0; i < share; ++i)
+    mine.push_back(rig.send(from_http(read_request(kSilent), "address 10.0.0.7")));
   for (const auto& r : mine) EXPECT_FALSE(r->has_value()) << "queued, waiting for the silent node";
   const auto over = rig.send(from_http(read_request(kSilent), "address 10.0.0.7"));
   ASSERT_TRUE(over->has_value()) << "over its share: refused at once";
@@ -128,15 +130,14 @@ TEST(AppRequests, SharesAreGivenBackAndEveryCallerIsServed) {
   for (int i = 0; i < 8; ++i) mine.push_back(rig.send(from_http(read_request(5), "address 10.0.0.7")));
   EXPECT_EQ(rig.send(from_http(read_request(5), "address 10.0.0.7"))->value_or(ApiReply{}).status, 429);
   const auto other = rig.send(from_http(read_request(5), "address 10.0.0.8"));
-  ASSERT_TRUE(rig.run_until([&] {
-    return other->has_value() && std::all_of(mine.begin(), mine.end(), [](const auto& r) { return r->has_value(); });
-  }));
+  auto all_answered = [&] { return std::all_of(mine.begin(), mine.end(), [](const auto& r) { return r->has_value(); }); };
+  ASSERT_TRUE(rig.run_until([&] { return other->has_value() && all_answered(); }));
   EXPECT_EQ((*other)->status, 200) << (*other)->body;
   for (const auto& r : mine) EXPECT_EQ((*r)->status, 200) << (*r)->body;
   // Answered: the caller has its whole share again.
-  for (int i = 0; i < 8; ++i) mine[static_cast<std::size_t>(i)] = rig.send(from_http(read_request(5), "address 10.0.0.7"));
+  for (auto& r : mine) r = rig.send(from_http(read_request(5), "address 10.0.0.7"));
   for (const auto& r : mine) EXPECT_FALSE(r->has_value());
-  ASSERT_TRUE(rig.run_until([&] { return std::all_of(mine.begin(), mine.end(), [](const auto& r) { return r->has_value(); }); }));
+  ASSERT_TRUE(rig.run_until(all_answered));
   for (const auto& r : mine) EXPECT_EQ((*r)->status, 200) << (*r)->body;
 }
 

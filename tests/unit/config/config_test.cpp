@@ -384,8 +384,8 @@ TEST(Config, TokenlessMqttRequestsAreRefusedUnlessConfigured) {
   const Config plain = merge(parse_config("mqtt: {uri: tcp://b:1883}\n", "gw.yaml"), cli);
   EXPECT_EQ(plain.http.anonymous_role(), Role::Admin);  // loopback HTTP without tokens: unchanged
   EXPECT_EQ(plain.mqtt.requests_role, Role::None);
-  EXPECT_EQ(merge(parse_config("mqtt: {uri: tcp://b:1883, requests-role: operator}\n", "gw.yaml"), cli).mqtt.requests_role,
-            Role::Operator);
+  const Config set = merge(parse_config("mqtt: {uri: tcp://b:1883, requests-role: operator}\n", "gw.yaml"), cli);
+  EXPECT_EQ(set.mqtt.requests_role, Role::Operator);
   // The demo without tokens reads over MQTT, as the README's tour does; with
   // tokens, or with the key set, it is the configuration's.
   CliOptions demo;

@@ -411,10 +411,8 @@ TEST_F(MqttPublisherTest, ConfiguredReplyTopicsReplaceTheDefault) {
   Subscriber client(broker_->uri(), "requester", {"plant/7/answers", "myapp/reply/1"}, {});
   ASSERT_TRUE(client.connect());
   auto send = [&](const std::string& reply_to) {
-    client.client()
-        .publish(::mqtt::make_message("canopen/gw1/1/0/nmt", R"({"command":"start","replyTo":")" + reply_to + R"("})", 1,
-                                      false))
-        ->wait_for(5s);
+    const std::string body = R"({"command":"start","replyTo":")" + reply_to + R"("})";
+    client.client().publish(::mqtt::make_message("canopen/gw1/1/0/nmt", body, 1, false))->wait_for(5s);
   };
   send("myapp/reply/1");  // allowed by the default only
   send("plant/7/answers");
