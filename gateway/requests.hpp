@@ -32,12 +32,18 @@ struct ApiRequest {
   bool authenticated = false;
   Role role = Role::None;
   std::string token;
+  // Who counts as one caller for per-caller limits (a share of each node's
+  // SDO queue, the MQTT rate limit): set by a transport that checked the
+  // caller (HTTP: "token '<name>'", or "address <ip>" without a token),
+  // otherwise by auth::identify from the token.
+  std::string caller;
 };
 
 struct ApiReply {
   int status = 200;       // HTTP semantics: 200, 400, 404, 422, 429, 503, 504 ...
   std::string body;       // JSON (problem+json when status >= 400) or protobuf
   std::string content_type = "application/json";
+  int retry_after = 0;    // seconds, with 429/503: when to try again (HTTP Retry-After); 0 = not said
 };
 
 using ReplyFn = std::function<void(ApiReply)>;

@@ -30,6 +30,15 @@ namespace {
 // Who asked, for the audit log.
 std::string requester(std::string_view who) { return who.empty() ? std::string("anonymous") : std::string(who); }
 
+// Requests that may wait per node behind the running one: the networks are
+// built with the SDO client's default configuration.
+constexpr std::size_t kSdoQueueLimit = canopen::sdo::ClientConfig{}.queue_limit;
+
+// The queue key of QueueShares for a node's SDO queue.
+std::uint64_t sdo_queue_key(std::uint32_t network, std::uint8_t node) {
+  return std::uint64_t{network} << 8 | node;
+}
+
 using canopen::can::Frame;
 
 // Frames of broadcast services the gateway produces itself that its own
@@ -102,6 +111,8 @@ App::App(boost::asio::io_context& io, Config config, Logger& log)
         for (const auto& c : config_.http.tokens) t.push_back({c.name, c.role, c.sha256});
         return auth::TokenStore(std::move(t));
       }()),
+      request_limiter_(config_.http.rate_limit, config_.http.rate_burst),
+      sdo_shares_(auth::caller_share(kSdoQueueLimit)),
       encode_ctx_{config_.gateway_id},
       pipeline_(
           [this, mqtt_protobuf = config_.mqtt.enabled && config_.mqtt.format == PayloadFormat::Protobuf](
@@ -458,6 +469,7 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
   out.queue_depth = c.queue_depth;
   out.queue_bytes = c.queue_bytes;
   out.reconnects = c.reconnects;
+  out.requests_refused = c.replies_refused;
   return out;
 }
 
@@ -501,6 +513,7 @@ void App::start_mqtt() {
   mc.queue.dir = config_.mqtt.queue_dir;
   mc.queue.max_bytes = config_.mqtt.queue_max_bytes;
   mc.queue.max_messages = config_.mqtt.queue_max_messages;
+  mc.reply_topics = config_.mqtt.reply_topics;
   GatewayStatusInfo status;
   status.version = CANOPEN_GATEWAY_VERSION;
   status.node_id = nets_.empty() ? 127 : nets_.front()->cfg.node_id;
@@ -636,8 +649,17 @@ void App::handle_request(const ApiRequest& request, ReplyFn reply) {
   ApiRequest identified;
   if (!request.authenticated) {
     identified = request;
-    const Role anonymous = config_.mqtt.requests_role.value_or(config_.http.anonymous_role());
-    if (auto d = auth::identify(identified, tokens_, anonymous)) {
+    const auto denial = auth::identify(identified, tokens_, config_.mqtt.requests_role.value_or(Role::None));
+    // Per caller, as the HTTP authorizer does per address, and before
+    // anything is logged or done: a flood with bad tokens is limited too.
+    if (!request_limiter_.allow(identified.caller, auth::RateLimiter::Clock::now())) {
+      ++counters_.requests_rate_limited;
+      auto r = problem(429, "too many requests from " + identified.caller + "; slow down (http.rate-limit)", opts);
+      r.retry_after = 1;
+      reply(std::move(r));
+      return;
+    }
+    if (const auto& d = denial) {
       ++counters_.auth_failures;
       audit("auth failure: " + requester(identified.who) + ": request to net " + std::to_string(request.network) +
             " node " + std::to_string(request.node) + ": " + std::to_string(d->status) + " " + d->detail);
@@ -769,8 +791,14 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
   // costs devices without block transfer a refusal. Strings and domains
   // stay unknown.
   r.expected_size = canopen::fixed_size(type);
+  if (auto full = take_sdo_place(n, req, opts)) {
+    reply(std::move(*full));
+    return;
+  }
   ++counters_.sdo_requests;
-  r.on_done = [this, type, opts, reply, t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
+  r.on_done = [this, type, opts, reply, net = n.number, node = req.node, caller = req.caller,
+               t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
+    sdo_place_freed(net, node, caller);
     sdo_finished(t0);
     if (!res.ok()) {
       reply(transfer_failed(res, opts));
@@ -785,7 +813,7 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
     }
     reply(sdo_response(*v, opts));
   };
-  submitted(n, n.network->sdo().upload(std::move(r), canopen::SteadyClock::now()), req.node, opts, reply);
+  submitted(n, n.network->sdo().upload(std::move(r), canopen::SteadyClock::now()), req.node, req.caller, opts, reply);
 }
 
 void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
@@ -838,12 +866,18 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
     reply(sdo_response(written, opts));
     return;
   }
+  if (auto full = take_sdo_place(n, req, opts)) {
+    audit(line + ": " + std::to_string(full->status) + " (" + req.caller + " has its share of the node's SDO queue)");
+    reply(std::move(*full));
+    return;
+  }
   canopen::sdo::Request r;
   r.node = req.node;
   r.index = index;
   r.sub = sub;
-  r.on_done = [this, opts, reply, written, line,
+  r.on_done = [this, opts, reply, written, line, net = n.number, node = req.node, caller = req.caller,
                t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
+    sdo_place_freed(net, node, caller);
     sdo_finished(t0);
     if (!res.ok()) {
       audit(line + ": " + res.error.message());
@@ -854,7 +888,7 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
     reply(sdo_response(written, opts));
   };
   submitted(n, n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now()), req.node,
-            opts, reply);
+            req.caller, opts, reply);
 }
 
 http::Authorizer App::http_authorizer() {
@@ -888,13 +922,33 @@ ApiReply App::transfer_failed(const canopen::sdo::TransferResult& res, const Rep
 }
 
 void App::submitted(Net& n, const canopen::Result<canopen::sdo::RequestId>& id, std::uint8_t node,
-                    const ReplyOptions& opts, const ReplyFn& reply) {
+                    const std::string& caller, const ReplyOptions& opts, const ReplyFn& reply) {
   // Queue full for the node (060A0023h): the client should come back later.
   if (!id) {
-    reply(problem(429, "too many SDO requests queued for node " + std::to_string(node), opts));
+    sdo_place_freed(n.number, node, caller);  // the handler that would give it back never runs
+    auto r = problem(429, "too many SDO requests queued for node " + std::to_string(node), opts);
+    r.retry_after = 1;
+    reply(std::move(r));
     return;
   }
   n.driver->poke();
+}
+
+std::optional<ApiReply> App::take_sdo_place(const Net& n, const ApiRequest& req, const ReplyOptions& opts) {
+  if (sdo_shares_.take(sdo_queue_key(n.number, req.node), req.caller)) return std::nullopt;
+  ++counters_.sdo_share_refused;
+  const std::string who = req.caller.empty() ? std::string("this caller") : req.caller;
+  auto r = problem(429,
+                   who + " has " + std::to_string(sdo_shares_.share()) + " SDO requests waiting for node " +
+                       std::to_string(req.node) + " already, its share of the node's queue of " +
+                       std::to_string(kSdoQueueLimit) + "; send more once one is answered (other callers still get in)",
+                   opts);
+  r.retry_after = 1;
+  return r;
+}
+
+void App::sdo_place_freed(std::uint32_t net, std::uint8_t node, const std::string& caller) {
+  sdo_shares_.give_back(sdo_queue_key(net, node), caller);
 }
 
 void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {

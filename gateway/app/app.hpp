@@ -84,8 +84,12 @@ class App {
   // SDO read/write and NMT requests (REST and MQTT). The reply comes
   // later, on the io thread, exactly once. A request that is not
   // `authenticated` (MQTT) is identified by its token (config: http.tokens,
-  // mqtt.requests-role without one); every request's role is checked
-  // against auth::required_role (401/403, with an audit line).
+  // mqtt.requests-role without one) and rate-limited per caller with
+  // http.rate-limit's numbers (429); every request's role is checked
+  // against auth::required_role (401/403, with an audit line). A caller
+  // (ApiRequest::caller) may have at most auth::caller_share(SDO queue
+  // limit) SDO requests queued or running per node (429 with Retry-After
+  // beyond that), so one caller cannot lock the others out of a node.
   void handle_request(const ApiRequest& request, ReplyFn reply);
 
   // Extra consumer of every outgoing event (e.g. the WebSocket hub).
@@ -123,6 +127,7 @@ class App {
   struct MqttCounters {
     bool connected = false;
     std::uint64_t published = 0, acked = 0, dropped = 0, queue_depth = 0, queue_bytes = 0, reconnects = 0;
+    std::uint64_t requests_refused = 0;  // dropped unanswered for their reply address
   };
   std::optional<MqttCounters> mqtt_counters() const;
   // Process data to `node`'s RPDO `number` (COB-ID and mapping from its
@@ -175,6 +180,8 @@ class App {
     std::uint64_t sdo_timeouts = 0;
     std::uint64_t nmt_commands = 0;
     std::uint64_t auth_failures = 0;  // requests refused with 401/403 here (MQTT, NMT resets)
+    std::uint64_t sdo_share_refused = 0;   // 429: the caller held its share of the node's SDO queue
+    std::uint64_t requests_rate_limited = 0;  // 429: an MQTT caller over the rate limit
     // SDO transfers on the bus, submit to result (queueing included), as a
     // Prometheus histogram: count per upper bound (seconds; not cumulative),
     // the last slot for slower ones.
@@ -209,13 +216,21 @@ class App {
   // After submitting an SDO transfer: 429 when the node's queue was full,
   // else the driver follows the new deadline.
   void submitted(Net& net, const canopen::Result<canopen::sdo::RequestId>& id, std::uint8_t node,
-                 const ReplyOptions& opts, const ReplyFn& reply);
+                 const std::string& caller, const ReplyOptions& opts, const ReplyFn& reply);
+  // Takes a place of the node's SDO queue for req.caller: the 429 reply
+  // when the caller holds its share. Every place taken MUST be given back
+  // once the request leaves the queue (sdo_place_freed), or when the
+  // queue refuses it (submitted).
+  std::optional<ApiReply> take_sdo_place(const Net& net, const ApiRequest& req, const ReplyOptions& opts);
+  void sdo_place_freed(std::uint32_t net, std::uint8_t node, const std::string& caller);
   void start_mqtt();
 
   boost::asio::io_context& io_;
   Config config_;
   Logger& log_;
   auth::TokenStore tokens_;
+  auth::RateLimiter request_limiter_;  // MQTT requests, per caller (REST: the HTTP authorizer's)
+  auth::QueueShares sdo_shares_;       // per network/node SDO queue, per caller
   EncodeContext encode_ctx_;
   std::function<bool()> protobuf_demand_;
   StateCache cache_;

@@ -127,6 +127,37 @@ std::string_view peer_address(std::string_view peer) {
   return colon == std::string_view::npos ? peer : peer.substr(0, colon);
 }
 
+std::string token_caller(std::string_view token_name) { return "token '" + std::string(token_name) + "'"; }
+std::string address_caller(std::string_view address) { return "address " + std::string(address); }
+
+std::string QueueShares::key(std::uint64_t queue, std::string_view caller) {
+  std::string k = std::to_string(queue);
+  k += '\n';  // not in a queue number
+  k += caller;
+  return k;
+}
+
+bool QueueShares::take(std::uint64_t queue, std::string_view caller) {
+  auto& n = held_[key(queue, caller)];
+  if (n >= share_) {
+    if (n == 0) held_.erase(key(queue, caller));  // share 0: nothing held, nothing kept
+    return false;
+  }
+  ++n;
+  return true;
+}
+
+void QueueShares::give_back(std::uint64_t queue, std::string_view caller) {
+  auto it = held_.find(key(queue, caller));
+  if (it == held_.end()) return;
+  if (--it->second == 0) held_.erase(it);
+}
+
+std::size_t QueueShares::held(std::uint64_t queue, std::string_view caller) const {
+  auto it = held_.find(key(queue, caller));
+  return it == held_.end() ? 0 : it->second;
+}
+
 std::optional<std::string> bearer_token(const http::Request& req) {
   if (auto h = req.header("authorization")) {
     std::string_view v = *h;
@@ -152,6 +183,7 @@ http::Authorizer make_http_authorizer(HttpAuthSettings settings, const TokenStor
       r.headers.emplace_back("Retry-After", "1");
       return r;
     }
+    req.caller = address_caller(address);
     if (!settings.enabled) {
       req.role = static_cast<std::uint8_t>(Role::Admin);
       return std::nullopt;
@@ -170,6 +202,7 @@ http::Authorizer make_http_authorizer(HttpAuthSettings settings, const TokenStor
       auto p = tokens.find(*token);
       if (!p) return deny(401, "the bearer token is not valid");
       req.who = p->name + "@" + std::string(address);
+      req.caller = token_caller(p->name);
       role = p->role;
     }
     req.role = static_cast<std::uint8_t>(role);
@@ -182,6 +215,7 @@ http::Authorizer make_http_authorizer(HttpAuthSettings settings, const TokenStor
 
 std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role anonymous) {
   if (req.authenticated) return std::nullopt;
+  req.caller = std::string(kTokenlessMqttCaller);
   if (req.token.empty()) {
     req.role = anonymous;
     if (req.who.empty()) req.who = "anonymous";
@@ -194,6 +228,7 @@ std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role a
     return Denial{401, "the token is not valid"};
   }
   req.who = p->name + (req.who.empty() ? std::string() : "@" + req.who);
+  req.caller = token_caller(p->name);
   req.role = p->role;
   return std::nullopt;
 }

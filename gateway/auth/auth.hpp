@@ -1,6 +1,7 @@
 // Who may call the gateway's API: bearer tokens (stored as SHA-256 hashes
-// in the config), the role each route needs, a per-client rate limit, and
-// the HTTP authorizer that combines them with audit lines for failures.
+// in the config), the role each route needs, a per-client rate limit,
+// per-caller shares of bounded queues, and the HTTP authorizer that
+// combines them with audit lines for failures.
 //
 // Roles (role.hpp): viewer reads, operator writes (SDO download, RPDO, SYNC,
 // NMT start/stop/pre-operational, PDO configuration read), admin resets
@@ -11,10 +12,12 @@
 // MQTT alike.
 //
 // Thread safety: TokenStore is immutable after construction (any thread).
-// RateLimiter and the authorizer are for the io_context thread only.
+// RateLimiter, QueueShares and the authorizer are for the io_context
+// thread only.
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -70,9 +73,10 @@ Role required_role(std::string_view method, std::string_view route);
 // 0x82); ignored for SDO.
 Role required_role(RequestKind kind, std::uint8_t nmt_command);
 
-// Token bucket per client address: `rate` requests per second, bursts up
-// to `burst`. rate 0 = unlimited. Buckets idle long enough to be full are
-// forgotten, so memory stays bounded by the clients of the last minute.
+// Token bucket per client (an HTTP client address, an MQTT caller):
+// `rate` requests per second, bursts up to `burst`. rate 0 = unlimited.
+// Buckets idle long enough to be full are forgotten, so memory stays
+// bounded by the clients of the last minute.
 class RateLimiter {
  public:
   using Clock = std::chrono::steady_clock;
@@ -94,6 +98,38 @@ class RateLimiter {
 // "203.0.113.5:4711" -> "203.0.113.5", "[::1]:80" -> "::1".
 std::string_view peer_address(std::string_view peer);
 
+// Callers for per-caller limits (ApiRequest::caller): a token's holder
+// wherever it comes from, else a client address; MQTT requests without a
+// (valid) token are one caller together, since nothing tells them apart.
+std::string token_caller(std::string_view token_name);  // "token 'dashboard'"
+std::string address_caller(std::string_view address);    // "address 10.0.0.7"
+inline constexpr std::string_view kTokenlessMqttCaller = "MQTT requests without a token";
+
+// The places of one caller in a bounded queue (each node's SDO queue) when
+// the queue holds `capacity`: max(2, capacity / 4), so one caller cannot
+// fill it and at least four share it.
+constexpr std::size_t caller_share(std::size_t capacity) { return capacity / 4 > 2 ? capacity / 4 : 2; }
+
+// Per-caller shares of bounded queues: a caller may hold at most `share`
+// places of one queue (key: whatever names the queue, e.g. network and
+// node). A place is taken when a request is queued and MUST be given back
+// once when it leaves (completed, failed or refused by the queue). Memory
+// is bounded by the places held.
+class QueueShares {
+ public:
+  explicit QueueShares(std::size_t share) : share_(share) {}
+  // Takes a place; false (nothing taken) when the caller holds `share` already.
+  bool take(std::uint64_t queue, std::string_view caller);
+  void give_back(std::uint64_t queue, std::string_view caller);
+  std::size_t held(std::uint64_t queue, std::string_view caller) const;
+  std::size_t share() const { return share_; }
+
+ private:
+  static std::string key(std::uint64_t queue, std::string_view caller);
+  std::size_t share_;
+  std::unordered_map<std::string, std::size_t> held_;
+};
+
 // The bearer token of an HTTP request: "Authorization: Bearer <t>", or for
 // the WebSocket upgrade only (browsers cannot set its headers) the query
 // parameter access_token. nullopt: none sent.
@@ -108,8 +144,8 @@ struct HttpAuthSettings {
 
 // The HttpServer's authorizer: rate limit (429 + Retry-After), then the
 // token (401 + WWW-Authenticate when missing or unknown), then the route's
-// role (403). Sets Request::who (token name, else "anonymous@<address>")
-// and Request::role. Every 401/403 is an audit line (UTC time, who,
+// role (403). Sets Request::who (token name, else "anonymous@<address>"),
+// Request::caller (token_caller, else address_caller) and Request::role. Every 401/403 is an audit line (UTC time, who,
 // method and path, result). `tokens` and `log` MUST outlive the authorizer.
 http::Authorizer make_http_authorizer(HttpAuthSettings settings, const TokenStore& tokens, Logger& log);
 
@@ -120,8 +156,9 @@ struct Denial {
 };
 
 // For transports that cannot check a caller themselves (MQTT requests):
-// sets req.role and req.who from req.token, or `anonymous` (who
-// "anonymous") without one. A token that matches nothing: 401. Does
+// sets req.role, req.who and req.caller from req.token (token_caller), or
+// `anonymous` (who "anonymous", caller kTokenlessMqttCaller) without one.
+// A token that matches nothing: 401 (caller kTokenlessMqttCaller). Does
 // nothing for an already authenticated request.
 std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role anonymous);
 

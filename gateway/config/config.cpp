@@ -1,6 +1,7 @@
 #include "config.hpp"
 
 #include "canopen/eds/eds.hpp"
+#include "mqtt/topic_filter.hpp"
 
 #include <unistd.h>
 
@@ -236,7 +237,7 @@ Role parse_role(const At& a, bool allow_none = false) {
 
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   a.expect_map({"uri", "client-id", "username", "password", "password-file", "tls", "format", "qos", "heartbeat",
-                "heartbeat-min-interval-ms", "queue", "requests-role"});
+                "heartbeat-min-interval-ms", "queue", "requests-role", "reply-topics"});
   auto uri = a.get("uri");
   if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
   m.uri = uri->str();
@@ -274,6 +275,16 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   }
   if (auto v = a.get("heartbeat")) m.heartbeat = v->boolean();
   if (auto v = a.get("requests-role")) m.requests_role = parse_role(*v, true);
+  if (auto r = a.get("reply-topics")) {
+    for (const auto& item : r->items()) {
+      const auto filter = item.str();
+      if (auto why = mqtt::topic_filter_problem(filter); !why.empty())
+        item.fail("'" + filter + "' is not an MQTT topic filter: " + std::string(why));
+      m.reply_topics.push_back(filter);
+    }
+    // An empty list would refuse every reply; leaving the key out is the default rule.
+    if (m.reply_topics.empty()) r->fail("no topic filter (leave the key out for the default rule)");
+  }
   if (auto v = a.get("heartbeat-min-interval-ms")) m.heartbeat_min_interval = ms(*v, 3'600'000);
   if (auto q = a.get("queue")) {
     q->expect_map({"dir", "max-bytes", "max-messages"});
@@ -526,7 +537,10 @@ Config merge(Config c, const CliOptions& cli) {
                           (net.simulated ? std::string("the demo network") : net.interface));
     }
   }
-  if (!c.mqtt.requests_role) c.mqtt.requests_role = c.http.anonymous_role();
+  // Tokenless MQTT requests are refused unless mqtt.requests-role says
+  // otherwise (the broker's users are not the gateway's). The demo without
+  // tokens lets them read, as its tour does; writes need the key set.
+  if (!c.mqtt.requests_role) c.mqtt.requests_role = c.demo && c.http.tokens.empty() ? Role::Viewer : Role::None;
   if (c.http.auth && !c.http.loopback()) {
     if (c.http.tokens.empty())
       throw ConfigError(where + ": http.tokens: none configured, and http.listen " + c.http.address +

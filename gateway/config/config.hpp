@@ -108,10 +108,14 @@ struct MqttConfig {
   std::uint64_t queue_max_bytes = 256ULL << 20;
   std::uint64_t queue_max_messages = 1'000'000;
   // Role of an MQTT request that carries no token (anyone who may publish
-  // to the request topics on the broker). Default: None (a token is
-  // required) when http.tokens are configured, else the role HTTP callers
-  // get without a token (admin: auth off, or loopback without tokens).
+  // to the request topics on the broker). nullopt (not set): None, a token
+  // is required, also without http.tokens; --demo without tokens sets
+  // viewer (the README's tour reads over MQTT).
   std::optional<Role> requests_role;
+  // mqtt.reply-topics: topic filters a request's reply topic must match,
+  // instead of the default rule (mqtt/topic_filter.hpp,
+  // reply_topic_refusal). Empty: the default. Each is a valid filter.
+  std::vector<std::string> reply_topics;
   int qos_for(EventKind k) const;
 };
 

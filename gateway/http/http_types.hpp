@@ -39,6 +39,9 @@ struct Request {
   // audit lines; "" = anonymous) and the application's role value.
   std::string who;
   std::uint8_t role = 0;
+  // Set by the Authorizer too: who counts as one caller for per-caller
+  // limits (e.g. the token's name, else the client address); "" = the peer.
+  std::string caller;
   // True when an Authorizer ran and let the request through; false when
   // the server has none (everything is open).
   bool authorized = false;

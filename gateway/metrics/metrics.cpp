@@ -232,6 +232,16 @@ std::string render_metrics(const MetricsSnapshot& s) {
     w.single("canopen_gateway_request_auth_failures_total",
              "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", C,
              *s.request_auth_failures);
+  if (s.requests_over_sdo_share || s.mqtt_requests_rate_limited) {
+    const std::string limited = "canopen_gateway_requests_limited_total";
+    w.family(limited,
+             "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
+             "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).",
+             C);
+    if (s.requests_over_sdo_share) w.sample(limited, {{"reason", "sdo-queue-share"}}, *s.requests_over_sdo_share);
+    if (s.mqtt_requests_rate_limited)
+      w.sample(limited, {{"reason", "mqtt-rate-limit"}}, *s.mqtt_requests_rate_limited);
+  }
 
   const std::string events = "canopen_gateway_events_published_total";
   w.family(events, "Events published to clients, by kind.", C);
@@ -250,6 +260,10 @@ std::string render_metrics(const MetricsSnapshot& s) {
     w.single("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", G,
              s.mqtt_queue_bytes);
     w.single("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", C, s.mqtt_reconnects);
+    w.single("canopen_gateway_mqtt_requests_refused_total",
+             "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
+             "correlation data over 1 KiB.",
+             C, s.mqtt_requests_refused);
   }
 
   // WebSocket and HTTP.

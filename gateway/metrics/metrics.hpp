@@ -117,12 +117,16 @@ struct MetricsSnapshot {
   // NMT resets); the HTTP authorizer's refusals are in http_responses_by_status.
   // nullopt = no such family.
   std::optional<std::uint64_t> request_auth_failures;
+  // Requests the request handler answered 429 for their caller: over its
+  // share of a node's SDO queue, over the MQTT rate limit. nullopt = no such family.
+  std::optional<std::uint64_t> requests_over_sdo_share, mqtt_requests_rate_limited;
   std::map<std::string, std::uint64_t> events_by_kind;  // "tpdo" -> n
   bool mqtt_enabled = false;  // false: only canopen_gateway_mqtt_enabled 0 is written
   bool mqtt_connected = false;
   std::uint64_t mqtt_published = 0, mqtt_acked = 0, mqtt_dropped = 0;
   std::uint64_t mqtt_queue_depth = 0, mqtt_queue_bytes = 0;
   std::uint64_t mqtt_reconnects = 0;
+  std::uint64_t mqtt_requests_refused = 0;  // dropped unanswered for their reply address
   std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
   std::map<int, std::uint64_t> http_responses_by_status;  // 200 -> n
   double uptime_seconds = 0.0;

@@ -10,4 +10,5 @@ add_library(gateway_mqtt STATIC
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_mqtt
   PUBLIC gateway_lib gateway_mqtt_codec Boost::json OpenSSL::SSL OpenSSL::Crypto
+  PRIVATE gateway_messages  # problem replies as the App and REST build them
   PRIVATE canopen_options)

@@ -2,6 +2,8 @@
 
 #include "mqtt/mqtt_codec.hpp"
 #include "mqtt/mqtt_connection.hpp"
+#include "mqtt/topic_filter.hpp"
+#include "request_codec.hpp"
 
 #include <boost/asio/post.hpp>
 #include <boost/asio/ssl/context.hpp>
@@ -48,15 +50,6 @@ bool parse_decimal(std::string_view s, T& out) {
   if (s.empty()) return false;
   auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
   return ec == std::errc() && p == s.data() + s.size();
-}
-
-std::string problem(int status, std::string_view title, std::string_view detail) {
-  json::object o;
-  o["type"] = "about:blank";
-  o["title"] = title;
-  o["status"] = status;
-  o["detail"] = detail;
-  return json::serialize(o);
 }
 
 }  // namespace
@@ -608,15 +601,43 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     bool v5 = false;
   };
 
-  bool is_request_topic(std::string_view t) const {
-    if (t.rfind(prefix, 0) != 0) return false;
-    auto parts = split(t.substr(prefix.size()), '/');
-    return (parts.size() == 4 && parts[2] == "sdo" && (parts[3] == "read" || parts[3] == "write")) ||
-           (parts.size() == 3 && parts[2] == "nmt");
-  }
+  // A warning that a flood of bad requests could repeat endlessly: the
+  // first, then at most one per interval, saying how many were left out.
+  struct LogThrottle {
+    static constexpr std::chrono::seconds kInterval{10};
+    std::chrono::steady_clock::time_point last{};
+    bool logged = false;
+    std::uint64_t left_out = 0;
+    void warn(Logger& log, std::string line) {
+      const auto now = std::chrono::steady_clock::now();
+      if (logged && now - last < kInterval) {
+        ++left_out;
+        return;
+      }
+      if (left_out > 0) line += " (and " + std::to_string(left_out) + " more like it since the last such line)";
+      logged = true;
+      last = now;
+      left_out = 0;
+      log.warn(line);
+    }
+  };
+  LogThrottle refused_log;      // reply address refused
+  LogThrottle bad_request_log;  // bad topic (answered 400)
 
-  static bool valid_reply_topic(std::string_view t) {
-    return !t.empty() && t.find_first_of("+#") == std::string_view::npos && t.size() < 65535;
+  // Why the reply address is refused ("" = it is not): see publisher.hpp.
+  std::string reply_refusal(const ReplyAddress& addr) const {
+    if (addr.correlation.size() > kMaxCorrelation)
+      return "correlation data of " + std::to_string(addr.correlation.size()) + " bytes (at most " +
+             std::to_string(kMaxCorrelation) + ")";
+    if (addr.corr_id) {
+      const std::size_t n = json::serialize(*addr.corr_id).size();
+      if (n > kMaxCorrelation)
+        return "correlationId of " + std::to_string(n) + " bytes (at most " + std::to_string(kMaxCorrelation) + ")";
+    }
+    if (addr.topic.empty()) return {};
+    if (auto why = reply_topic_refusal(addr.topic, cfg.gateway_id, cfg.reply_topics); !why.empty())
+      return "reply topic '" + addr.topic.substr(0, 200) + "': " + std::string(why);
+    return {};
   }
 
   void on_request(const codec::Publish& msg) {
@@ -661,10 +682,13 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
         if (changed) req.body = json::serialize(o);
       }
     }
-    if (!addr.topic.empty() && (!valid_reply_topic(addr.topic) || is_request_topic(addr.topic))) {
+    // A refused address gets nothing: a reply there is what must not
+    // happen, and a request nobody may hear the answer to is not executed.
+    if (auto why = reply_refusal(addr); !why.empty()) {
       ++counters.bad_requests;
-      log.warn("mqtt: request on " + topic + ": refused reply topic '" + addr.topic + "'");
-      addr.topic.clear();
+      ++counters.replies_refused;
+      refused_log.warn(log, "mqtt: request on " + topic.substr(0, 200) + " dropped unanswered: " + why);
+      return;
     }
 
     // canopen/<gw>/<net>/<node>/sdo/read|write or canopen/<gw>/<net>/<node>/nmt
@@ -695,8 +719,10 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     auto reply_fn = make_reply_fn(std::move(addr), topic);
     if (!error.empty()) {
       ++counters.bad_requests;
-      log.warn("mqtt: request on " + topic + ": " + error);
-      reply_fn(ApiReply{400, problem(400, "Bad Request", error), "application/problem+json"});
+      bad_request_log.warn(log, "mqtt: request on " + topic.substr(0, 200) + ": " + error);
+      ReplyOptions opts;
+      opts.protobuf = req.protobuf;
+      reply_fn(problem(400, error, opts));
       return;
     }
     handler(req, std::move(reply_fn));

@@ -55,8 +55,12 @@
 // (string) and "correlationId" (any JSON value): both are removed from the
 // body handed to the handler, and the reply, published to replyTo, gets
 // "correlationId" added when its body is a JSON object. A request without a
-// reply address is still executed, its reply only logged. Reply topics that
-// are themselves request topics of this gateway are refused (no loops).
+// reply address is still executed, its reply only logged. A reply topic
+// must pass reply_topic_refusal (mqtt/topic_filter.hpp: the contract's
+// default rule, or MqttConfig::reply_topics) and correlation data (or the
+// serialized correlationId) must be at most kMaxCorrelation bytes;
+// otherwise the request is dropped: not executed, not answered, counted in
+// bad_requests and replies_refused, logged at most once per 10 s.
 // A body with MQTT 5 content type "application/x-protobuf" is protobuf.
 //
 // Thread safety: every member function must be called on the thread that
@@ -75,6 +79,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <boost/asio/io_context.hpp>
 
@@ -122,7 +127,14 @@ struct MqttConfig {
   // less 4 caps it (mosquitto: 20 by default, so 16).
   std::size_t inflight_window = 256;
   bool accept_requests = true;
+  // Topic filters a reply topic must match instead of the default rule
+  // (mqtt.reply-topics); each MUST be valid (topic_filter_problem).
+  std::vector<std::string> reply_topics;
 };
+
+// Largest MQTT 5 correlation data, or 3.1.1 correlationId as JSON text, a
+// request may carry (the reply echoes it).
+constexpr std::size_t kMaxCorrelation = 1024;
 
 class MqttPublisher {
  public:
@@ -139,6 +151,7 @@ class MqttPublisher {
     std::uint64_t reconnects = 0;       // connects after the first
     std::uint64_t requests = 0;
     std::uint64_t bad_requests = 0;     // bad topic or reply address
+    std::uint64_t replies_refused = 0;  // requests dropped for their reply address (see Requests)
     std::uint64_t replies = 0;
     std::uint64_t replies_dropped = 0;  // not connected when the reply was ready
     std::uint64_t socket_writes = 0;    // send()/write calls on the sockets (batching)

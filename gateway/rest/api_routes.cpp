@@ -40,6 +40,8 @@ http::Response metrics_response(const App& app, const http::HttpServer& server) 
   s.sdo_latency_counts.assign(counters.sdo_latency_counts.begin(), counters.sdo_latency_counts.end());
   s.sdo_latency_sum = counters.sdo_latency_sum;
   s.request_auth_failures = counters.auth_failures;
+  s.requests_over_sdo_share = counters.sdo_share_refused;
+  s.mqtt_requests_rate_limited = counters.requests_rate_limited;
   for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k) {
     const auto kind = static_cast<EventKind>(k);
     s.events_by_kind[std::string(to_string(kind))] = app.pipeline().published(kind);
@@ -53,6 +55,7 @@ http::Response metrics_response(const App& app, const http::HttpServer& server) 
     s.mqtt_queue_depth = mq->queue_depth;
     s.mqtt_queue_bytes = mq->queue_bytes;
     s.mqtt_reconnects = mq->reconnects;
+    s.mqtt_requests_refused = mq->requests_refused;
   }
   const auto hs = server.stats();
   s.ws_clients = hs.ws_clients;

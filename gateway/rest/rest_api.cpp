@@ -13,6 +13,7 @@
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/pdo/remote_config.hpp"
 #include "canopen/sdo/abort.hpp"
+#include "auth.hpp"
 #include "canopen_gateway.pb.h"
 #include "eds_report.hpp"
 #include "google/protobuf/util/json_util.h"
@@ -49,6 +50,7 @@ Response from_reply(ApiReply reply) {
   r.status = reply.status;
   r.content_type = std::move(reply.content_type);
   r.body = std::move(reply.body);
+  if (reply.retry_after > 0) r.headers.emplace_back("Retry-After", std::to_string(reply.retry_after));
   return r;
 }
 
@@ -322,6 +324,7 @@ void get_emcy(App& app, const Request& req, Responder respond) {
 void caller(const Request& req, ApiRequest& api) {
   api.authenticated = true;
   api.who = req.who;
+  api.caller = req.caller.empty() ? auth::address_caller(auth::peer_address(req.peer)) : req.caller;
   api.role = req.authorized ? static_cast<Role>(req.role) : Role::Admin;
 }
 

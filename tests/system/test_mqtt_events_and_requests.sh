@@ -5,7 +5,9 @@
 # spirit), and their heartbeats, decoded TPDOs, EMCYs and NMT states reach an
 # MQTT subscriber with per-network seq without gaps; a WebSocket client gets
 # the same events through its filter; SDO read/write and NMT requests over
-# MQTT 5 and 3.1.1 get their replies; a killed device is reported lost.
+# MQTT 5 and 3.1.1 get their replies (tokenless: mqtt.requests-role), while
+# a request asking for a reply on the gateway's own status topic is dropped
+# unanswered; a killed device is reported lost.
 # uml-run: --timeout 200
 . "$(dirname "$0")/lib.sh"
 GW=gw1
@@ -26,6 +28,7 @@ networks:
 mqtt:
   uri: tcp://127.0.0.1:$MOSQ_PORT
   qos: {default: 1}
+  requests-role: operator   # tokenless requests are refused without it
 YAML
 start_gateway --config "$T/gw.yaml" --log-level debug
 wait_for "$T/mqtt.log" "^canopen/$GW/status .*\"state\": ?\"online\"" 10
@@ -74,6 +77,13 @@ mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -V mqttv5 -t "canopen/$GW/1/5/nmt" -m '
 wait_for "$T/replies.log" '^reply/nmt ' 10
 wait_for "$T/mqtt.log" "^canopen/$GW/1/5/state .*\"stopped\"" 10
 pass "NMT stop over MQTT: node 5 stopped"
+
+# A reply must not land in the gateway's own topics (contract, "MQTT topics").
+mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -V mqttv5 -t "canopen/$GW/1/10/sdo/read" \
+  -m '{"index": "0x1018", "subIndex": 1}' -D publish response-topic "canopen/$GW/status"
+wait_for "$GW_LOG" "dropped unanswered: reply topic 'canopen/$GW/status'" 10
+grep "^canopen/$GW/status " "$T/mqtt.log" | grep -q '"value"' && fail "a reply was published to canopen/$GW/status"
+pass "reply to canopen/$GW/status refused, nothing published there"
 
 # The same gateway over REST and /metrics (issue 6 builds on these).
 http_get() { /usr/bin/python3 -c 'import sys, urllib.request; print(urllib.request.urlopen(sys.argv[1], timeout=10).read().decode())' "$1"; }

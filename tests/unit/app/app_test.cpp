@@ -27,6 +27,9 @@ struct DemoRig {
     cli.demo = true;
     cli.gateway_id = "test";
     Config c = merge(Config{}, cli);
+    // The requests here carry no token: they may do everything (the demo
+    // alone lets them read; roles are tested in app_requests_test.cpp).
+    c.mqtt.requests_role = Role::Admin;
     log = std::make_unique<Logger>(LogLevel::Error);
     app = std::make_unique<App>(io, c, *log);
     app->add_consumer([this](const EncodedEventPtr& ev) { events.push_back(ev); });

@@ -1,8 +1,11 @@
 // gateway/auth: token hashes, the role of each route and request, the
-// per-client rate limit, and how the bearer token is taken from a request.
+// per-client rate limit, per-caller queue shares, and how the bearer token
+// and the caller are taken from a request.
 #include "auth.hpp"
 
 #include <gtest/gtest.h>
+
+#include "log.hpp"
 
 namespace gateway::auth {
 namespace {
@@ -76,6 +79,50 @@ TEST(RateLimiter, BurstThenRatePerClient) {
   for (int i = 0; i < 1000; ++i) EXPECT_TRUE(off.allow("x", t0));
 }
 
+// Issue 12, item 12: a caller holds at most its share of each queue; what
+// one caller holds does not count against another.
+TEST(QueueShares, AtMostTheShareOfEachQueuePerCaller) {
+  EXPECT_EQ(caller_share(32), 8U);
+  EXPECT_EQ(caller_share(4), 2U);  // at least 2
+  EXPECT_EQ(caller_share(0), 2U);
+  QueueShares shares(2);
+  EXPECT_TRUE(shares.take(1, "address 10.0.0.1"));
+  EXPECT_TRUE(shares.take(1, "address 10.0.0.1"));
+  EXPECT_FALSE(shares.take(1, "address 10.0.0.1"));
+  EXPECT_EQ(shares.held(1, "address 10.0.0.1"), 2U);
+  EXPECT_TRUE(shares.take(1, "address 10.0.0.2"));  // another caller
+  EXPECT_TRUE(shares.take(2, "address 10.0.0.1"));  // another queue
+  shares.give_back(1, "address 10.0.0.1");
+  EXPECT_TRUE(shares.take(1, "address 10.0.0.1"));
+  for (int i = 0; i < 3; ++i) shares.give_back(1, "address 10.0.0.1");  // more than held: stays at 0
+  EXPECT_EQ(shares.held(1, "address 10.0.0.1"), 0U);
+  EXPECT_TRUE(shares.take(1, "address 10.0.0.1"));
+  EXPECT_EQ(shares.held(1, "address 10.0.0.1"), 1U);
+}
+
+// The HTTP authorizer names the caller for per-caller limits: the token's
+// holder, else the client address.
+TEST(HttpAuthorizer, NamesTheCallerByTokenElseAddress) {
+  TokenStore store({{"ops", Role::Operator, kTestHash}});
+  Logger log(LogLevel::Error);
+  HttpAuthSettings settings;
+  settings.anonymous = Role::Viewer;
+  auto authorize = make_http_authorizer(settings, store, log);
+  http::Request req;
+  req.method = "GET";
+  req.route = "/api/v1/networks/{net}/nodes";
+  req.peer = "10.0.0.7:4711";
+  EXPECT_FALSE(authorize(req));
+  EXPECT_EQ(req.caller, "address 10.0.0.7");
+  req.headers = {{"authorization", "Bearer test"}};
+  EXPECT_FALSE(authorize(req));
+  EXPECT_EQ(req.caller, "token 'ops'");
+  settings.enabled = false;  // auth off: everyone is admin, still one caller per address
+  http::Request open = req;
+  EXPECT_FALSE(make_http_authorizer(settings, store, log)(open));
+  EXPECT_EQ(open.caller, "address 10.0.0.7");
+}
+
 TEST(Bearer, FromHeaderOrForTheEventStreamFromTheQuery) {
   http::Request r;
   EXPECT_FALSE(bearer_token(r));
@@ -105,11 +152,13 @@ TEST(Identify, TokenOrAnonymousRoleForUncheckedTransports) {
   EXPECT_EQ(check_role(req, Role::Operator)->status, 401);
 
   EXPECT_EQ(req.who, "anonymous");
+  EXPECT_EQ(req.caller, kTokenlessMqttCaller);  // one caller for every tokenless request
 
   req.who = "mqtt";  // the transport's part of who
   req.token = "test";
   EXPECT_FALSE(identify(req, store, Role::None));
   EXPECT_EQ(req.who, "ops@mqtt");
+  EXPECT_EQ(req.caller, "token 'ops'");  // the token's holder, wherever it comes from
   EXPECT_EQ(req.role, Role::Operator);
   EXPECT_TRUE(req.token.empty());  // not kept once checked
   EXPECT_FALSE(check_role(req, Role::Operator));
@@ -121,6 +170,7 @@ TEST(Identify, TokenOrAnonymousRoleForUncheckedTransports) {
   auto d = identify(bad, store, Role::Admin);  // a bad token is refused even where anonymous may
   ASSERT_TRUE(d);
   EXPECT_EQ(d->status, 401);
+  EXPECT_EQ(bad.caller, kTokenlessMqttCaller);  // limited with the tokenless ones
 
   ApiRequest http;  // checked by the HTTP layer already: left alone
   http.authenticated = true;

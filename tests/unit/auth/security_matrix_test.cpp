@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -269,6 +270,39 @@ TEST(SecurityMatrix, RateLimitPerClientAnswers429ButNotForPublicFiles) {
   EXPECT_EQ(rig.as(std::nullopt, "GET", "/").status, 200);  // the dashboard still loads
   std::this_thread::sleep_for(600ms);                        // a token refills in 500 ms
   EXPECT_EQ(rig.as(Role::Viewer, "GET", "/api/v1/gateway").status, 200);
+}
+
+// Issue 12, item 12, over HTTP: a viewer filling its share of a silent
+// node's SDO queue gets 429 with Retry-After and the reason, and does not
+// lock the operator out of the node.
+TEST(SecurityMatrix, OneCallerGetsOnlyItsShareOfANodesSdoQueue) {
+  SecureRig rig;
+  const std::string silent = "/api/v1/networks/1/nodes/42/sdo/1018/1?type=u32";  // no device: requests wait
+  const std::vector<std::string> viewer = {"Authorization: Bearer " + kTokens.at(Role::Viewer)};
+  std::vector<std::future<HttpReply>> replies;
+  for (int i = 0; i < 9; ++i)
+    replies.push_back(std::async(std::launch::async, test::fetch, rig.rig.port, "GET", silent, "", viewer));
+  auto answered = [&] {
+    return std::count_if(replies.begin(), replies.end(),
+                         [](auto& f) { return !f.valid() || f.wait_for(0s) == std::future_status::ready; });
+  };
+  ASSERT_TRUE(rig.run_until([&] { return answered() == 1; })) << "the ninth is refused at once";
+  HttpReply refused;
+  for (auto& f : replies)
+    if (f.wait_for(0s) == std::future_status::ready) refused = f.get();  // f is !valid() from here on
+  EXPECT_EQ(refused.status, 429);
+  EXPECT_TRUE(refused.has_header("retry-after: 1")) << refused.head;
+  EXPECT_EQ(refused.content_type, "application/problem+json");
+  EXPECT_THAT(refused.body, HasSubstr("token 'viewer' has 8 SDO requests waiting for node 42 already"));
+  // The operator's request goes into the node's queue (counted as started).
+  const auto before = rig.rig.app->counters().sdo_requests;
+  auto op = std::async(std::launch::async, test::fetch, rig.rig.port, "GET", silent, "",
+                       std::vector<std::string>{"Authorization: Bearer " + kTokens.at(Role::Operator)});
+  EXPECT_TRUE(rig.run_until([&] { return rig.rig.app->counters().sdo_requests == before + 1; }));
+  EXPECT_EQ(rig.rig.app->counters().sdo_share_refused, 1u);
+  // Closing the connections ends the waiting clients.
+  rig.rig.server->stop();
+  rig.run_until([&] { return answered() == 9 && op.wait_for(0s) == std::future_status::ready; });
 }
 
 }  // namespace

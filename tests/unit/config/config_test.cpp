@@ -375,6 +375,46 @@ TEST(Config, RolesOfCallersWithoutToken) {
   EXPECT_THAT(config_error("http: {rate-limit: {per-minute: 3}}\n"), HasSubstr("per-minute"));
 }
 
+// Issue 12, item 8 (contract "MQTT topics"): requests without a token act
+// with mqtt.requests-role, default none, also when no tokens are configured
+// (the broker's users are not the gateway's local callers).
+TEST(Config, TokenlessMqttRequestsAreRefusedUnlessConfigured) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  const Config plain = merge(parse_config("mqtt: {uri: tcp://b:1883}\n", "gw.yaml"), cli);
+  EXPECT_EQ(plain.http.anonymous_role(), Role::Admin);  // loopback HTTP without tokens: unchanged
+  EXPECT_EQ(plain.mqtt.requests_role, Role::None);
+  const Config set = merge(parse_config("mqtt: {uri: tcp://b:1883, requests-role: operator}\n", "gw.yaml"), cli);
+  EXPECT_EQ(set.mqtt.requests_role, Role::Operator);
+  // The demo without tokens reads over MQTT, as the README's tour does; with
+  // tokens, or with the key set, it is the configuration's.
+  CliOptions demo;
+  demo.demo = true;
+  EXPECT_EQ(merge(Config{}, demo).mqtt.requests_role, Role::Viewer);
+  EXPECT_EQ(merge(parse_config("mqtt: {uri: tcp://b:1883, requests-role: none}\n", "gw.yaml"), demo).mqtt.requests_role,
+            Role::None);
+  const Config demo_tokens = merge(parse_config("http:\n  tokens:\n    - {name: a, role: viewer, sha256: "
+                                                "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n",
+                                                "gw.yaml"),
+                                   demo);
+  EXPECT_EQ(demo_tokens.mqtt.requests_role, Role::None);
+}
+
+TEST(Config, ReplyTopicsAreCheckedTopicFilters) {
+  const Config c = parse_config("mqtt:\n  uri: tcp://b:1883\n  reply-topics: [plant/+/answers, 'ops/#']\n", "gw.yaml");
+  EXPECT_EQ(c.mqtt.reply_topics, (std::vector<std::string>{"plant/+/answers", "ops/#"}));
+  EXPECT_TRUE(parse_config("mqtt: {uri: tcp://b:1883}\n", "gw.yaml").mqtt.reply_topics.empty());  // the default rule
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://b:1883\n  reply-topics: [ok/reply, 'a/#/b']\n"),
+              HasSubstr("gw.yaml:3: mqtt.reply-topics[1]: 'a/#/b' is not an MQTT topic filter: '#' must be a whole "
+                        "level and the last one"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://b:1883\n  reply-topics: ['a/b+']\n"),
+              HasSubstr("'a/b+' is not an MQTT topic filter: '+' must be a whole level"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://b:1883\n  reply-topics: []\n"),
+              HasSubstr("mqtt.reply-topics: no topic filter (leave the key out for the default rule)"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://b:1883\n  reply-topics: a/reply\n"),
+              HasSubstr("mqtt.reply-topics: expected a list"));
+}
+
 TEST(Config, LoadConfigReadsTheFile) {
   const auto path = std::filesystem::temp_directory_path() / "canopen-config-test.yaml";
   {

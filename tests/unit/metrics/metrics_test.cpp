@@ -237,10 +237,28 @@ TEST(RenderMetrics, MqttFamiliesWhenEnabled) {
   EXPECT_NE(text.find("canopen_gateway_mqtt_queue_depth 1\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_mqtt_queue_bytes 128\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_mqtt_reconnects_total 0\n"), std::string::npos);
+  EXPECT_NE(text.find("# HELP canopen_gateway_mqtt_requests_refused_total MQTT requests dropped unanswered"),
+            std::string::npos);
+  EXPECT_NE(text.find("canopen_gateway_mqtt_requests_refused_total 0\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_build_info{version=\"1.2.3\"} 1\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_bus_state{network=\"2\",interface=\"vcan\\\"x\\\\y\\nz\",state=\"bus-off\"} 1\n"),
             std::string::npos);
   EXPECT_EQ(render_metrics(MetricsSnapshot{}).find("mqtt_connected"), std::string::npos);
+}
+
+// Issue 12: 429s for a caller's share of a node's SDO queue and for the
+// MQTT rate limit, one series each.
+TEST(RenderMetrics, RequestsLimitedPerCallerByReason) {
+  MetricsSnapshot s = full_snapshot();
+  s.requests_over_sdo_share = 3;
+  s.mqtt_requests_rate_limited = 7;
+  const std::string text = render_metrics(s);
+  EXPECT_NE(text.find("# HELP canopen_gateway_requests_limited_total Requests answered 429 for their caller"),
+            std::string::npos);
+  EXPECT_NE(text.find("# TYPE canopen_gateway_requests_limited_total counter\n"), std::string::npos);
+  EXPECT_NE(text.find("canopen_gateway_requests_limited_total{reason=\"sdo-queue-share\"} 3\n"), std::string::npos);
+  EXPECT_NE(text.find("canopen_gateway_requests_limited_total{reason=\"mqtt-rate-limit\"} 7\n"), std::string::npos);
+  EXPECT_EQ(render_metrics(full_snapshot()).find("requests_limited"), std::string::npos);  // no App counters: no family
 }
 
 // Checks the exposition the way a scraper would: every family has exactly one

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 
 #include "mqtt_support.hpp"
 
@@ -32,6 +33,24 @@ EncodedEventPtr make_event(EventKind k, std::string topic, std::string json, boo
   return e;
 }
 
+// A FILE* whose text the test can read (the publisher's log).
+struct MemoryLog {
+  MemoryLog() : file(open_memstream(&buf, &len)) {}
+  ~MemoryLog() {
+    std::fclose(file);
+    std::free(buf);
+  }
+  MemoryLog(const MemoryLog&) = delete;
+  MemoryLog& operator=(const MemoryLog&) = delete;
+  std::string text() {
+    std::fflush(file);
+    return std::string(buf, len);
+  }
+  char* buf = nullptr;
+  std::size_t len = 0;
+  std::FILE* file;
+};
+
 class MqttPublisherTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -54,9 +73,11 @@ class MqttPublisherTest : public ::testing::Test {
     return c;
   }
 
-  void start_publisher(MqttConfig c) {
+  // `log` (default: the fixture's, warnings to stderr) MUST outlive the publisher.
+  void start_publisher(MqttConfig c, gateway::Logger* log = nullptr) {
     io_.call([&] {
-      pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_, [this](const gateway::ApiRequest& r, gateway::ReplyFn reply) {
+      pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log != nullptr ? *log : log_,
+                                             [this](const gateway::ApiRequest& r, gateway::ReplyFn reply) {
         requests_.push_back(r);
         ++request_count_;
         boost::json::object o;
@@ -84,6 +105,8 @@ class MqttPublisherTest : public ::testing::Test {
   TempDir queue_dir_;
   std::optional<Broker> broker_;
   gateway::Logger log_{gateway::LogLevel::Warn};
+  MemoryLog captured_;  // for tests that read the log: start_publisher(c, &captured_log_)
+  gateway::Logger captured_log_{gateway::LogLevel::Warn, captured_.file};
   IoThread io_;
   std::unique_ptr<MqttPublisher> pub_;
   std::vector<gateway::ApiRequest> requests_;  // io thread
@@ -296,22 +319,107 @@ TEST_F(MqttPublisherTest, BadRequestsAreAnsweredOrLoggedNeverCrash) {
   send("canopen/gw1/1/200/nmt", rt);          // node out of range
   send("canopen/gw1/1/0/sdo/read", rt);       // node 0 only for nmt
   send("canopen/gw1/1/5/sdo/read", "\xff\xfe not json");  // no reply address: executed, logged
-  send("canopen/gw1/1/5/nmt", R"({"replyTo":"canopen/gw1/1/5/nmt"})");  // loop refused, executed
-  send("canopen/gw1/1/5/nmt", R"({"replyTo":"a/+/b"})");  // wildcard refused
+  send("canopen/gw1/1/5/nmt", R"({"replyTo":"canopen/gw1/1/5/nmt"})");  // loop: dropped, not executed
+  send("canopen/gw1/1/5/nmt", R"({"replyTo":"a/+/reply"})");  // wildcard: dropped, not executed
   send("canopen/gw1/1/5/nmt", "[1,2]");
   ASSERT_TRUE(client.wait_count(3, 10s));
   for (auto& m : client.messages()) {
     auto o = boost::json::parse(m->get_payload_str()).as_object();
     EXPECT_EQ(o.at("status").as_int64(), 400);
+    EXPECT_EQ(o.at("title").as_string(), "Bad Request");
   }
-  // The handler saw the four well-addressed ones.
-  EXPECT_TRUE(eventually([&] { return request_count_ == 4; }, 10s));
+  // The handler saw the two without a reply address.
+  EXPECT_TRUE(eventually([&] { return request_count_ == 2; }, 10s));
   // Still serving.
   send("canopen/gw1/1/5/nmt", R"({"command":"stop","replyTo":"replies/bad","correlationId":"ok"})");
   ASSERT_TRUE(client.wait_count(4, 10s));
   EXPECT_EQ(boost::json::parse(client.messages().at(3)->get_payload_str()).as_object().at("correlationId").as_string(),
             "ok");
   EXPECT_GE(counters().bad_requests, 5u);
+  EXPECT_EQ(counters().replies_refused, 2u);
+}
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto pos = text.find(what); pos != std::string::npos; pos = text.find(what, pos + 1)) ++n;
+  return n;
+}
+
+// Issue 12, item 8: a requester (with or without a token) cannot make the
+// gateway publish into its own topics, another gateway's or another
+// system's, nor have it echo huge correlation data. Such a request is not
+// executed and gets no reply anywhere; a flood of them is logged once.
+TEST_F(MqttPublisherTest, RepliesGoOnlyToAllowedTopicsWithSmallCorrelationData) {
+  start_broker();
+  start_publisher(config(), &captured_log_);
+  // One client sees every topic a refused reply could go to, and the fence.
+  Subscriber watch(broker_->uri(), "watch",
+                   {"canopen/gw1/status", "canopen/gw2/reply/x", "spBv1.0/g/NCMD/reply", "other/topic",
+                    "myapp/reply/big", "myapp/reply/ok"},
+                   {MQTTVERSION_5, true});
+  ASSERT_TRUE(watch.connect());
+  ASSERT_TRUE(watch.wait_topic("canopen/gw1/status", 10s));  // the retained online status
+  Subscriber client(broker_->uri(), "requester", {}, {MQTTVERSION_5, true});
+  ASSERT_TRUE(client.connect());
+  auto v311 = [&](const std::string& topic, const std::string& body) {
+    client.client().publish(::mqtt::make_message(topic, body, 1, false))->wait_for(5s);
+  };
+  auto v5 = [&](const std::string& reply_to, const std::string& correlation) {
+    auto msg = ::mqtt::make_message("canopen/gw1/1/5/sdo/read", R"({"index":"1017","subIndex":0})", 1, false);
+    msg->set_properties({::mqtt::property(::mqtt::property::RESPONSE_TOPIC, reply_to),
+                         ::mqtt::property(::mqtt::property::CORRELATION_DATA, correlation)});
+    client.client().publish(msg)->wait_for(5s);
+  };
+  const std::string read = R"({"index":"1017","subIndex":0,"replyTo":")";
+  v311("canopen/gw1/1/5/sdo/read", read + R"(canopen/gw1/status"})");  // its own status
+  v311("canopen/gw1/1/5/sdo/read", read + R"(canopen/gw2/reply/x"})");  // another gateway's
+  v311("canopen/gw1/1/5/sdo/read", read + R"(spBv1.0/g/NCMD/reply"})");  // Sparkplug
+  v311("canopen/gw1/1/5/sdo/read", read + R"(other/topic"})");  // no reply level
+  v311("canopen/gw1/1/5/sdo/read", read + R"(myapp/reply/big","correlationId":")" + std::string(1100, 'x') + R"("})");
+  v5("canopen/gw1/status", "c1");
+  v5("myapp/reply/big", std::string(1025, 'x'));  // correlation data over 1 KiB
+  const int refused = 7;
+  // 1 KiB exactly is fine; the reply comes after any the refused ones would have caused.
+  v5("myapp/reply/ok", std::string(1024, 'y'));
+  ASSERT_TRUE(watch.wait_topic("myapp/reply/ok", 10s));
+
+  const auto got = watch.messages();
+  ASSERT_EQ(got.size(), 2u) << "only the online status and the allowed reply: " << got.back()->get_topic();
+  EXPECT_EQ(got[1]->get_topic(), "myapp/reply/ok");
+  EXPECT_EQ(::mqtt::get<std::string>(got[1]->get_properties(), ::mqtt::property::CORRELATION_DATA),
+            std::string(1024, 'y'));
+  EXPECT_EQ(request_count_, 1) << "a request whose reply is refused is not executed";
+  const auto c = counters();
+  EXPECT_EQ(c.replies_refused, static_cast<std::uint64_t>(refused));
+  EXPECT_EQ(c.bad_requests, static_cast<std::uint64_t>(refused));
+  EXPECT_EQ(c.replies, 1u);
+  // Logged, but not once per request: a flood does not fill the journal.
+  const auto text = io_.call([&] {
+    captured_log_.flush();
+    return captured_.text();
+  });
+  EXPECT_EQ(count_of(text, "dropped unanswered"), 1u) << text;
+  EXPECT_NE(text.find("reply topic 'canopen/gw1/status'"), std::string::npos) << text;
+}
+
+// mqtt.reply-topics replaces the default rule.
+TEST_F(MqttPublisherTest, ConfiguredReplyTopicsReplaceTheDefault) {
+  start_broker();
+  auto cfg = config();
+  cfg.reply_topics = {"plant/+/answers"};
+  start_publisher(cfg);
+  Subscriber client(broker_->uri(), "requester", {"plant/7/answers", "myapp/reply/1"}, {});
+  ASSERT_TRUE(client.connect());
+  auto send = [&](const std::string& reply_to) {
+    const std::string body = R"({"command":"start","replyTo":")" + reply_to + R"("})";
+    client.client().publish(::mqtt::make_message("canopen/gw1/1/0/nmt", body, 1, false))->wait_for(5s);
+  };
+  send("myapp/reply/1");  // allowed by the default only
+  send("plant/7/answers");
+  ASSERT_TRUE(client.wait_count(1, 10s));
+  EXPECT_EQ(client.messages().at(0)->get_topic(), "plant/7/answers");
+  EXPECT_EQ(request_count_, 1);
+  EXPECT_EQ(counters().replies_refused, 1u);
 }
 
 // Messages published while the broker is down are held by the publisher's
