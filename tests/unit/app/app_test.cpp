@@ -27,6 +27,7 @@ struct DemoRig {
     cli.demo = true;
     cli.gateway_id = "test";
     Config c = merge(Config{}, cli);
+    c.state_dir.clear();  // keep no seq between tests (seq_store.hpp)
     log = std::make_unique<Logger>(LogLevel::Error);
     app = std::make_unique<App>(io, c, *log);
     app->add_consumer([this](const EncodedEventPtr& ev) { events.push_back(ev); });
