@@ -88,7 +88,7 @@ struct App::Net {
   // Per node: when the last heartbeat went to MQTT (rate limit).
   std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
   std::set<std::uint8_t> lost_nodes;  // for the own node's 8130h EMCY
-  std::optional<SeqStore> seq;         // the event sequence across restarts
+  std::optional<SeqStore> seq;         // the event sequence across restarts (from start())
 };
 
 struct App::Mqtt {
@@ -244,14 +244,6 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
 
   n.network = std::make_unique<canopen::Network>(od, master_sink,
                                                  [this, np](const canopen::Event& ev) { on_stack_event(*np, ev); });
-  // The sequence goes on where the last run left it (seq_store.hpp).
-  n.seq.emplace(config_.state_dir, number);
-  const auto opened = n.seq->open();
-  if (!opened.note.empty()) log_.log(opened.corrupt ? LogLevel::Warn : LogLevel::Info, n.label + ": " + opened.note);
-  if (opened.error)
-    log_.warn(n.label + ": cannot store the event sequence in " + n.seq->file().string() + ": " +
-              opened.error.message() + " (numbers may repeat after a crash)");
-  n.network->continue_sequence(opened.first);
   for (const auto& node : n.cfg.nodes) {
     auto it = n.descriptions.find(node.id);
     if (it != n.descriptions.end()) {
@@ -477,6 +469,19 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
 void App::start() {
   if (started_ || stopped_) return;
   started_ = true;
+  for (auto& n : nets_) {
+    // The sequence goes on where the last run left it (seq_store.hpp); read
+    // here, not in the constructor, so a start-up that fails there leaves
+    // it as it was.
+    n->seq.emplace(config_.state_dir, n->number);
+    const auto opened = n->seq->open();
+    if (!opened.note.empty())
+      log_.log(opened.corrupt ? LogLevel::Warn : LogLevel::Info, n->label + ": " + opened.note);
+    if (opened.error)
+      log_.warn(n->label + ": cannot store the event sequence in " + n->seq->file().string() + ": " +
+                opened.error.message() + " (numbers may repeat after a crash)");
+    n->network->continue_sequence(opened.first);
+  }
   if (config_.mqtt.enabled) start_mqtt();
   for (auto& n : nets_) {
     // The state the channel was opened in: the channel reported it before
@@ -608,7 +613,7 @@ void App::stop() {
   if (monitor_) monitor_->stop();
   // Exactly where the sequence stands: the next run goes on from there.
   for (auto& n : nets_) {
-    if (auto ec = n->seq->close(n->network->last_seq() + 1))
+    if (auto ec = n->seq ? n->seq->close(n->network->last_seq() + 1) : std::error_code())
       log_.warn(n->label + ": cannot store the event sequence in " + n->seq->file().string() + ": " + ec.message() +
                 " (the next run goes on after the reserved numbers)");
   }
@@ -648,7 +653,7 @@ void App::on_stack_event(Net& n, const canopen::Event& ev) {
   }
   log_event(n, ev);
   // Durably reserved before the event leaves the process (one write per block).
-  if (auto ec = n.seq->use(ev.seq))
+  if (auto ec = n.seq ? n.seq->use(ev.seq) : std::error_code())
     log_.warn(n.label + ": cannot store the event sequence in " + n.seq->file().string() + ": " + ec.message() +
               " (numbers may repeat after a crash)");
   pipeline_.on_event(n.number, ev);
