@@ -141,6 +141,7 @@ int main(int argc, char** argv) {
   cli.demo = true;
   cli.gateway_id = "bench";
   Config config = merge(Config{}, cli);
+  config.state_dir.clear();  // nothing kept between runs
   config.http.rate_limit = 0;  // one client sending as fast as it can
   Logger log(LogLevel::Error);
   asio::io_context io;

@@ -44,6 +44,9 @@ int run(const gateway::CliOptions& opts) {
   gateway::Config config;
   try {
     config = gateway::merge(opts.config_file ? gateway::load_config(*opts.config_file) : gateway::Config{}, opts);
+    // Before CAN is opened and anything listens: a state directory that
+    // cannot be written is a configuration error, not a failure later.
+    gateway::check_state_dirs(config);
   } catch (const gateway::ConfigError& e) {
     print_error(e.what());
     return kExitConfig;

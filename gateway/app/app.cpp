@@ -16,6 +16,7 @@
 #include "json_text.hpp"
 #include "mqtt/publisher.hpp"
 #include "request_codec.hpp"
+#include "seq_store.hpp"
 #include "sim/asio_memory_bus.hpp"
 #include "sim/simulator.hpp"
 
@@ -96,10 +97,14 @@ struct App::Net {
   // Per node: when the last heartbeat went to MQTT (rate limit).
   std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
   std::set<std::uint8_t> lost_nodes;  // for the own node's 8130h EMCY
+  std::optional<SeqStore> seq;         // the event sequence across restarts (from start())
 };
 
 struct App::Mqtt {
   std::unique_ptr<mqtt::MqttPublisher> publisher;
+  // Retained node state topics to delete at a clean stop: every configured
+  // node's and every one published.
+  std::set<std::string> state_topics;
 };
 
 App::App(boost::asio::io_context& io, Config config, Logger& log)
@@ -474,6 +479,21 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
 }
 
 void App::start() {
+  if (started_ || stopped_) return;
+  started_ = true;
+  for (auto& n : nets_) {
+    // The sequence goes on where the last run left it (seq_store.hpp); read
+    // here, not in the constructor, so a start-up that fails there leaves
+    // it as it was.
+    n->seq.emplace(config_.state_dir, n->number);
+    const auto opened = n->seq->open();
+    if (!opened.note.empty())
+      log_.log(opened.corrupt ? LogLevel::Warn : LogLevel::Info, n->label + ": " + opened.note);
+    if (opened.error)
+      log_.warn(n->label + ": cannot store the event sequence in " + n->seq->file().string() + ": " +
+                opened.error.message() + " (numbers may repeat after a crash)");
+    n->network->continue_sequence(opened.first);
+  }
   if (config_.mqtt.enabled) start_mqtt();
   for (auto& n : nets_) {
     // The state the channel was opened in: the channel reported it before
@@ -514,25 +534,21 @@ void App::start_mqtt() {
   mc.queue.max_bytes = config_.mqtt.queue_max_bytes;
   mc.queue.max_messages = config_.mqtt.queue_max_messages;
   mc.reply_topics = config_.mqtt.reply_topics;
-  GatewayStatusInfo status;
-  status.version = CANOPEN_GATEWAY_VERSION;
-  status.node_id = nets_.empty() ? 127 : nets_.front()->cfg.node_id;
-  for (const auto& n : nets_) status.networks.push_back(n->number);
-  status.timestamp = std::chrono::system_clock::now();
-  const EncodeContext ctx{config_.gateway_id};
-  const bool proto = mc.format == mqtt::PayloadFormat::Protobuf;
-  status.online = true;
-  auto online = encode_status(status, ctx);
-  status.online = false;
-  auto offline = encode_status(status, ctx);
-  mc.online_payload = proto ? online->binary : online->json;
-  mc.offline_payload = proto ? offline->binary : offline->json;
+  // The Will is fixed at start: it carries the start time and uptime 0
+  // (the broker publishes it when it notices the loss; only a clean stop
+  // knows when it went offline).
+  mc.online_payload = status_payload(true);
+  mc.offline_payload = status_payload(false);
   mqtt_->publisher = std::make_unique<mqtt::MqttPublisher>(
       io_, mc, log_, [this](const ApiRequest& req, ReplyFn reply) { handle_request(req, std::move(reply)); });
   auto* pub = mqtt_->publisher.get();
+  for (const auto& n : nets_) {
+    for (const auto& node : n->cfg.nodes) mqtt_->state_topics.insert(node_topic(encode_ctx_, n->number, node.id, "state"));
+  }
   const bool heartbeats = config_.mqtt.heartbeat;
   const auto min_interval = config_.mqtt.heartbeat_min_interval;
   pipeline_.add_consumer([this, pub, heartbeats, min_interval](const EncodedEventPtr& ev) {
+    if (ev->kind == EventKind::State) mqtt_->state_topics.insert(ev->topic);
     if (ev->kind == EventKind::Heartbeat) {
       if (!heartbeats) return;
       if (min_interval.count() > 0) {
@@ -553,13 +569,48 @@ void App::start_mqtt() {
   log_.info("MQTT: publishing to " + config_.mqtt.uri + " as canopen/" + config_.gateway_id + "/...");
 }
 
+std::string App::status_payload(bool online) const {
+  GatewayStatusInfo status;
+  status.online = online;
+  status.version = CANOPEN_GATEWAY_VERSION;
+  status.node_id = nets_.empty() ? 127 : nets_.front()->cfg.node_id;
+  for (const auto& n : nets_) status.networks.push_back(n->number);
+  status.timestamp = std::chrono::system_clock::now();
+  status.uptime_ms = static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - started_at_).count());
+  auto e = encode_status(status, EncodeContext{config_.gateway_id});
+  return config_.mqtt.format == PayloadFormat::Protobuf ? e->binary : e->json;
+}
+
 void App::stop() {
   if (stopped_) return;
   stopped_ = true;
   for (auto& n : nets_) {
     if (n->simulator) n->simulator->stop();
   }
-  if (mqtt_ && mqtt_->publisher) mqtt_->publisher->stop();
+  // The CAN side closes: each network's last event says so (the retained
+  // bus topic becomes `down`, cause link-down), in order behind the events
+  // before it.
+  for (auto& n : nets_) {
+    const auto state = n->channel->state();
+    if (!started_ || state == canopen::can::BusState::Down) continue;
+    canopen::can::BusEvent down;
+    down.state = canopen::can::BusState::Down;
+    down.previous = state;
+    down.cause = canopen::can::BusEventCause::LinkDown;
+    n->network->report(down);
+  }
+  if (mqtt_ && mqtt_->publisher) {
+    // No retained message may claim a node runs once the gateway is gone:
+    // its state topics are deleted (an empty retained message; not a state
+    // of the contract's list, which would be a claim about the node), and
+    // the offline status says when and after how long.
+    mqtt::MqttPublisher::Farewell last;
+    const auto qos = static_cast<std::uint8_t>(config_.mqtt.qos_for(EventKind::State));
+    for (const auto& topic : mqtt_->state_topics) last.messages.push_back({topic, std::string(), qos, true});
+    last.offline_payload = status_payload(false);
+    mqtt_->publisher->stop(std::chrono::seconds(2), last);
+  }
   for (auto& n : nets_) {
     n->driver.reset();
     if (n->socket) {
@@ -573,6 +624,12 @@ void App::stop() {
     }
   }
   if (monitor_) monitor_->stop();
+  // Exactly where the sequence stands: the next run goes on from there.
+  for (auto& n : nets_) {
+    if (auto ec = n->seq ? n->seq->close(n->network->last_seq() + 1) : std::error_code())
+      log_.warn(n->label + ": cannot store the event sequence in " + n->seq->file().string() + ": " + ec.message() +
+                " (the next run goes on after the reserved numbers)");
+  }
   log_.flush();
 }
 
@@ -608,6 +665,10 @@ void App::on_stack_event(Net& n, const canopen::Event& ev) {
     if (n.driver) n.driver->poke();
   }
   log_event(n, ev);
+  // Durably reserved before the event leaves the process (one write per block).
+  if (auto ec = n.seq ? n.seq->use(ev.seq) : std::error_code())
+    log_.warn(n.label + ": cannot store the event sequence in " + n.seq->file().string() + ": " + ec.message() +
+              " (numbers may repeat after a crash)");
   pipeline_.on_event(n.number, ev);
 }
 

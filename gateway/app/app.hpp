@@ -77,8 +77,11 @@ class App {
 
   // Boot-up of the own node on every network, simulated devices, MQTT.
   void start();
-  // Offline status, MQTT flushed briefly, CAN closed. Afterwards the
-  // io_context runs out of work.
+  // Each network's last event (bus `down`); MQTT: what is queued and the
+  // window allows, the retained node states deleted, the offline status
+  // with the stop time and uptime (publisher.hpp, Farewell); CAN closed;
+  // each network's seq stored exactly (config.state_dir). Blocks the io
+  // thread up to 2 s for MQTT. Afterwards the io_context runs out of work.
   void stop();
 
   // SDO read/write and NMT requests (REST and MQTT). The reply comes
@@ -224,6 +227,8 @@ class App {
   std::optional<ApiReply> take_sdo_place(const Net& net, const ApiRequest& req, const ReplyOptions& opts);
   void sdo_place_freed(std::uint32_t net, std::uint8_t node, const std::string& caller);
   void start_mqtt();
+  // The gateway status (MQTT payload format) as of now: time and uptime.
+  std::string status_payload(bool online) const;
 
   boost::asio::io_context& io_;
   Config config_;
@@ -241,6 +246,7 @@ class App {
   std::unique_ptr<Mqtt> mqtt_;
   Counters counters_;
   std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();
+  bool started_ = false;
   bool stopped_ = false;
 };
 

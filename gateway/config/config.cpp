@@ -27,13 +27,14 @@ class At {
  public:
   At(const YAML::Node& n, std::string path, const std::string& file) : n_(n), path_(std::move(path)), file_(file) {}
 
-  [[noreturn]] void fail(const std::string& reason) const {
-    std::string where = file_.empty() ? std::string("<config>") : file_;
+  [[noreturn]] void fail(const std::string& reason) const { throw ConfigError(where() + ": " + reason); }
+
+  // "file:line: key.path", as errors start.
+  std::string where() const {
+    std::string w = file_.empty() ? std::string("<config>") : file_;
     const auto mark = n_.Mark();
-    if (!n_.IsNull() || mark.line >= 0) {
-      if (mark.line >= 0) where += ":" + std::to_string(mark.line + 1);
-    }
-    throw ConfigError(where + ": " + (path_.empty() ? std::string("(top level)") : path_) + ": " + reason);
+    if (mark.line >= 0) w += ":" + std::to_string(mark.line + 1);
+    return w + ": " + (path_.empty() ? std::string("(top level)") : path_);
   }
 
   bool is_map() const { return n_.IsMap(); }
@@ -400,7 +401,10 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
       if (!l) v->fail("'" + v->str() + "' is not one of trace, debug, info, warn, error");
       c.log_level = *l;
     }
-    if (auto v = g->get("state-dir")) c.state_dir = resolve(dir, v->str());
+    if (auto v = g->get("state-dir")) {
+      c.state_dir = resolve(dir, v->str());
+      c.state_dir_origin = v->where();
+    }
   }
   if (auto n = top.get("networks")) {
     std::set<std::string> ifaces;
@@ -414,6 +418,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   }
   if (auto m = top.get("mqtt")) {
     parse_mqtt(*m, c.mqtt, dir);
+    if (auto q = m->get("queue"); q && q->get("dir")) c.queue_dir_origin = q->get("dir")->where();
     // QoS per kind needs the file name for errors, so it is read here.
     if (auto q = m->get("qos")) {
       for (const auto& kv : q->node()) {
@@ -477,7 +482,6 @@ Config merge(Config c, const CliOptions& cli) {
     // (position, velocity) flow too.
     sim.sync.period = std::chrono::milliseconds(100);
     c.networks.push_back(std::move(sim));
-    c.http.auth = false;  // the demo is for looking at, on loopback
   }
   // --eds NODE=FILE describes NODE on every network.
   for (const auto& e : cli.eds) {
@@ -513,19 +517,27 @@ Config merge(Config c, const CliOptions& cli) {
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
   if (c.mqtt.client_id.empty()) c.mqtt.client_id = "canopen-gateway-" + c.gateway_id;
   if (cli.http) split_host_port(*cli.http, c.http.address, c.http.port);
+  // --demo is for looking at on this machine: no login only where nobody
+  // else can reach it and no tokens say otherwise (api-contract).
+  if (c.demo && c.http.tokens.empty() && c.http.loopback()) c.http.auth = false;
   const char* systemd_state = std::getenv("STATE_DIRECTORY");  // StateDirectory= (may list several, ':')
   if (c.state_dir.empty() && systemd_state != nullptr && *systemd_state != '\0') {
     const std::string dirs = systemd_state;
     c.state_dir = dirs.substr(0, dirs.find(':'));
+    c.state_dir_origin = "gateway.state-dir from $STATE_DIRECTORY (systemd StateDirectory=)";
   }
   if (c.state_dir.empty()) {
     // A service runs as root; a user's run keeps its state in the user's home.
     const char* home = std::getenv("HOME");
-    c.state_dir = (::geteuid() == 0 || home == nullptr)
-                      ? std::string("/var/lib/canopen-gateway")
-                      : (fs::path(home) / ".local/state/canopen-gateway").string();
+    const bool system = ::geteuid() == 0 || home == nullptr;
+    c.state_dir = system ? std::string("/var/lib/canopen-gateway")
+                         : (fs::path(home) / ".local/state/canopen-gateway").string();
+    c.state_dir_origin = std::string("gateway.state-dir not set, default for ") + (system ? "root" : "a user ($HOME)");
   }
-  if (c.mqtt.queue_dir.empty()) c.mqtt.queue_dir = (fs::path(c.state_dir) / "mqtt-queue").string();
+  if (c.mqtt.queue_dir.empty()) {
+    c.mqtt.queue_dir = (fs::path(c.state_dir) / "mqtt-queue").string();
+    c.queue_dir_origin = "mqtt.queue.dir not set, default <state-dir>/mqtt-queue (" + c.state_dir_origin + ")";
+  }
 
   const std::string where = c.source.empty() ? std::string("command line") : c.source;
   if (c.networks.empty())
@@ -544,7 +556,8 @@ Config merge(Config c, const CliOptions& cli) {
   if (c.http.auth && !c.http.loopback()) {
     if (c.http.tokens.empty())
       throw ConfigError(where + ": http.tokens: none configured, and http.listen " + c.http.address +
-                        " is not loopback: nobody could use the API; add tokens (see deploy/gateway.example.yaml), "
+                        " is not loopback" + (c.demo ? " (--demo turns authentication off on loopback only)" : "") +
+                        ": nobody could use the API; add tokens (see deploy/gateway.example.yaml), "
                         "listen on 127.0.0.1, or set http.auth: false (not advised)");
     if (c.http.cert_file.empty() && !c.http.plain_http)
       throw ConfigError(where + ": http.tls: http.listen " + c.http.address +

@@ -151,7 +151,12 @@ struct Config {
   std::string source;      // the file it came from ("" = command line only)
   std::string gateway_id;  // default: host name
   LogLevel log_level = LogLevel::Info;
-  std::string state_dir;   // where the MQTT queue lives by default
+  // Each network's event seq (seq-net<N>) and, by default, the MQTT queue.
+  // merge() always sets it; "" (a Config built by hand) keeps nothing.
+  std::string state_dir;
+  // Where state_dir and mqtt.queue_dir came from, for messages:
+  // "gw.yaml:3: gateway.state-dir", "STATE_DIRECTORY (systemd)", ... (merge()).
+  std::string state_dir_origin, queue_dir_origin;
   bool demo = false;
   std::vector<NetworkConfig> networks;  // numbered from 1 in this order
   MqttConfig mqtt;
@@ -165,8 +170,18 @@ Config parse_config(const std::string& yaml_text, const std::string& file);
 Config load_config(const std::string& file);
 // Applies the command line on top (flags win) and checks the result as a
 // whole (at least one network, unique interfaces and node-IDs, EDS files
-// exist). Throws ConfigError (or UsageError for flag problems).
+// exist). --demo turns authentication off only on a loopback listener
+// without tokens (api-contract); otherwise the normal rules apply. Throws
+// ConfigError (or UsageError for flag problems).
 Config merge(Config base, const CliOptions& cli);
+// Start-up check of the directories the gateway writes (merge()d config):
+// state_dir always, mqtt.queue_dir with MQTT on. Creates them if missing and
+// creates and removes a file in each. Throws ConfigError naming the key,
+// where it came from (file:line, flag, environment or default), the
+// directory and the reason. A full file system passes (ENOSPC: the gateway
+// runs on and drops by its policy). Call before anything listens or opens
+// CAN.
+void check_state_dirs(const Config& c);
 // The host name, sanitised into an MQTT topic level.
 std::string default_gateway_id();
 

@@ -771,27 +771,60 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     }
   }
 
-  void stop(std::chrono::milliseconds timeout) {
+  void stop(std::chrono::milliseconds timeout, const MqttPublisher::Farewell& last) {
     if (!running) return;
     running = false;
     sync_timer.cancel();
     retry_timer.cancel();
+    bool farewell_sent = false;
     if (conn && connected) {
-      // The offline status (retained) and DISCONNECT, then wait for the
-      // broker to close: it handles them in order, so the Will is not sent.
+      // Everything goes in one synchronous write (a TLS write started now
+      // could not be joined): first the queue's unsent messages as drain()
+      // would send them (window and buffer cap), so the final messages
+      // overtake nothing when there is no backlog; then the
+      // farewell, the offline status (retained) and DISCONNECT. The broker
+      // handles them in order, so the Will is not sent.
       scratch.clear();
-      const std::string topic = status_topic();
-      codec::Publish p;
-      p.topic = topic;
-      p.payload = cfg.offline_payload;
-      p.qos = max_qos;
-      p.retain = retain_available;
-      const std::uint16_t pid = alloc_pid();
-      p.packet_id = p.qos > 0 ? (pid == 0 ? 1 : pid) : 0;
-      codec::encode_publish(scratch, version, p);
+      if (queue.flush_pending()) flush_queue();
+      std::vector<std::uint64_t> tail_q0;  // leave the queue once written, as in on_drained()
+      while (inflight_q1 < window() && scratch.size() < kMaxBuffered && queue.next(item)) {
+        codec::Publish p;
+        p.topic = item.msg.topic;
+        p.payload = item.msg.payload;
+        p.qos = item.msg.qos == 0 ? 0 : max_qos;
+        p.retain = item.msg.retained && retain_available;
+        if (p.qos > 0 && (p.packet_id = alloc_pid()) == 0) break;
+        if (max_packet > 0 && codec::publish_size(version, p) > max_packet) continue;  // drain() drops it
+        if (codec::encode_publish(scratch, version, p) != codec::Error::None) continue;
+        if (p.qos > 0) {
+          pid_slot[p.packet_id] = item.seq;
+          ++inflight_q1;
+        } else {
+          tail_q0.push_back(item.seq);
+        }
+        ++counters.sent;
+      }
+      auto add = [&](std::string_view topic, std::string_view payload, std::uint8_t qos, bool retain) {
+        codec::Publish p;
+        p.topic = topic;
+        p.payload = payload;
+        p.qos = qos == 0 ? 0 : max_qos;
+        p.retain = retain && retain_available;
+        if (p.qos > 0) {
+          const std::uint16_t pid = alloc_pid();
+          p.packet_id = pid == 0 ? 1 : pid;
+        }
+        if (max_packet > 0 && codec::publish_size(version, p) > max_packet) return;
+        (void)codec::encode_publish(scratch, version, p);
+      };
+      for (const auto& m : last.messages) add(m.topic, m.payload, m.qos, m.retained);
+      add(status_topic(), last.offline_payload.empty() ? cfg.offline_payload : last.offline_payload, 1, true);
       codec::encode_disconnect(scratch, version);
       socket_writes_before += conn->writes();
-      if (!conn->finish(scratch, timeout)) log.warn("mqtt: disconnect did not complete; the broker sends the Will");
+      farewell_sent = conn->finish(scratch, timeout);
+      if (!farewell_sent) log.warn("mqtt: disconnect did not complete; the broker sends the Will");
+      for (auto seq : farewell_sent ? tail_q0 : std::vector<std::uint64_t>{})
+        if (queue.ack(seq)) ++counters.acked;
       conn.reset();
     } else {
       drop_connection();
@@ -799,6 +832,11 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     connected = false;
     connecting = false;
     forget_in_flight(true);
+    // Unacknowledged messages are replayed by the next run; the farewell
+    // must come after them again (and at all, when it was not sent now).
+    if (!last.messages.empty() && (!farewell_sent || queue.depth() > 0)) {
+      for (const auto& m : last.messages) publish(m.topic, m.payload, m.qos, m.retained);
+    }
     flush_queue(true);
     queue.sync();
   }
@@ -820,10 +858,10 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
 MqttPublisher::MqttPublisher(asio::io_context& io, MqttConfig cfg, Logger& log, RequestHandler handler)
     : impl_(std::make_shared<Impl>(io, std::move(cfg), log, std::move(handler))) {}
 
-MqttPublisher::~MqttPublisher() { impl_->stop(std::chrono::seconds(1)); }
+MqttPublisher::~MqttPublisher() { impl_->stop(std::chrono::seconds(1), {}); }
 
 void MqttPublisher::start() { impl_->start(); }
-void MqttPublisher::stop(std::chrono::milliseconds timeout) { impl_->stop(timeout); }
+void MqttPublisher::stop(std::chrono::milliseconds timeout, const Farewell& last) { impl_->stop(timeout, last); }
 
 void MqttPublisher::publish(const EncodedEventPtr& ev) { publish(ev, impl_->cfg.format); }
 

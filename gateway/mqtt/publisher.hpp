@@ -166,10 +166,28 @@ class MqttPublisher {
   MqttPublisher(const MqttPublisher&) = delete;
   MqttPublisher& operator=(const MqttPublisher&) = delete;
 
+  // What stop() sends last, before DISCONNECT.
+  struct Farewell {
+    // Sent in order before the offline status, e.g. empty retained
+    // payloads that delete retained topics (MQTT 3.3.1.3). When they
+    // cannot all be sent now (not connected, or the DISCONNECT did not
+    // complete), or messages stay queued for the next run (whose replay
+    // would end with older values), they are also queued after everything
+    // else, so the next run delivers them after that backlog.
+    std::vector<QueuedMessage> messages;
+    // The offline status as of the stop (e.g. its time and the uptime);
+    // "" = MqttConfig::offline_payload, the Will's.
+    std::string offline_payload;
+  };
+
   void start();
-  // Publishes the offline status (retained), disconnects and stops
-  // reconnecting; messages still queued stay on disk for the next run.
-  void stop(std::chrono::milliseconds timeout = std::chrono::seconds(2));
+  // Stops reconnecting and, when connected, sends in one synchronous write
+  // (blocking the io thread for up to `timeout`): the queued messages not
+  // yet sent, as far as the in-flight window allows (so nothing published
+  // before stop() is overtaken), `last.messages`, the offline status
+  // (retained) and DISCONNECT. Messages not acknowledged stay on disk for
+  // the next run.
+  void stop(std::chrono::milliseconds timeout = std::chrono::seconds(2), const Farewell& last = {});
 
   // Never blocks on the network: queued, sent when the window allows.
   void publish(const EncodedEventPtr& ev);

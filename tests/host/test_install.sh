@@ -27,7 +27,7 @@ echo "PASS: installed files"
 # The installed dashboard is served, not the source one: mark the copy.
 echo "<!-- installed copy -->" >> "$P/usr/share/canopen-gateway/web/index.html"
 PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
-HOME=$P "$P/usr/bin/canopen-gateway" --demo --http "127.0.0.1:$PORT" > "$P/gw.log" 2>&1 &
+HOME=$P STATE_DIRECTORY=$P/state "$P/usr/bin/canopen-gateway" --demo --http "127.0.0.1:$PORT" > "$P/gw.log" 2>&1 &
 GW_PID=$!
 i=0
 until grep -q "canopen-gateway started" "$P/gw.log"; do

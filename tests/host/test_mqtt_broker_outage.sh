@@ -58,8 +58,8 @@ start, end = float(sys.argv[2]), float(sys.argv[3])
 arrivals, window = [], []  # seq in arrival order; (seq) of events stamped inside the outage
 for line in open(sys.argv[1]):
     topic, _, payload = line.partition(" ")
-    if "/" not in topic or not payload.strip():
-        continue
+    if "/" not in topic or payload.strip() in ("", "(null)"):
+        continue  # (null): an empty message, a retained state deleted at a stop
     ev = json.loads(payload)
     seq = int(ev["seq"])
     arrivals.append(seq)
@@ -106,8 +106,8 @@ kill, begin = float(sys.argv[2]), float(sys.argv[3])
 run1, last_ts = [], 0.0
 for line in open(sys.argv[1]):
     topic, _, payload = line.partition(" ")
-    if "/" not in topic or not payload.strip():
-        continue
+    if "/" not in topic or payload.strip() in ("", "(null)"):
+        continue  # (null): an empty message, a retained state deleted at a stop
     ev = json.loads(payload)
     ts = datetime.datetime.fromisoformat(ev["timestamp"].replace("Z", "+00:00")).timestamp()
     if ts > kill or ts < begin:

@@ -6,6 +6,9 @@ CAN_TOOL=$BUILD_DIR/tests/can_tool
 T=${TMPDIR:-/tmp}
 GW_LOG=$T/gateway.log
 GW_PID=
+# A gateway without gateway.state-dir keeps its state (each network's seq)
+# here, not in the machine's /var/lib/canopen-gateway.
+export STATE_DIRECTORY="${STATE_DIRECTORY:-$T/state}"
 
 fail() {
   echo "FAIL: $*"

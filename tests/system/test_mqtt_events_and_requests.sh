@@ -7,7 +7,8 @@
 # the same events through its filter; SDO read/write and NMT requests over
 # MQTT 5 and 3.1.1 get their replies (tokenless: mqtt.requests-role), while
 # a request asking for a reply on the gateway's own status topic is dropped
-# unanswered; a killed device is reported lost.
+# unanswered; a killed device is reported lost; after a clean stop nothing
+# retained claims a node runs.
 # uml-run: --timeout 200
 . "$(dirname "$0")/lib.sh"
 GW=gw1
@@ -115,6 +116,8 @@ for line in open(sys.argv[1]):
         continue
     if topic.endswith(("/sdo/read", "/sdo/write", "/nmt")):
         continue  # the requests this test published
+    if payload.strip() == "(null)":
+        continue  # an empty message: a retained state deleted at the stop
     seqs.append(int(json.loads(payload)["seq"]))
 seqs.sort()
 gaps = [(a, b) for a, b in zip(seqs, seqs[1:]) if b != a + 1]
@@ -122,4 +125,14 @@ print(f"{len(seqs)} events of network 1, seq {seqs[0]}..{seqs[-1]}, gaps {gaps[:
 sys.exit(1 if gaps or len(seqs) < 50 else 0)
 PY
 pass "seq of network 1 without gaps"
+
+# After the clean stop (issue 12 item 13): what a new subscriber finds
+# retained. No node state (deleted: none may claim a node runs), the bus
+# down, and the offline status of the stop, with the real uptime.
+mosquitto_sub -h 127.0.0.1 -p $MOSQ_PORT -v -t "canopen/$GW/#" -W 2 > "$T/retained.log" 2>/dev/null || true
+grep -E "^canopen/$GW/1/[0-9]+/state " "$T/retained.log" && fail "node states still retained after the stop"
+grep -qE "^canopen/$GW/1/bus .*\"state\": ?\"down\"" "$T/retained.log" || fail "bus not down: $(cat "$T/retained.log")"
+grep -qE "^canopen/$GW/status .*\"state\": ?\"offline\"" "$T/retained.log" || fail "no offline status: $(cat "$T/retained.log")"
+grep -qE "^canopen/$GW/status .*\"uptimeMs\": ?\"0\"" "$T/retained.log" && fail "offline status with uptime 0: $(cat "$T/retained.log")"
+pass "after the stop: $(grep "^canopen/$GW/status " "$T/retained.log")"
 stop_mosquitto

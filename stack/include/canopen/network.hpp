@@ -106,7 +106,12 @@ class Network {
   pdo::PdoReceiver& pdo() { return pdo_; }
   // Process data to the nodes' RPDOs; call the caller's poke afterwards.
   pdo::PdoTransmitter& rpdo() { return rpdo_; }
+  // The seq of the latest event (0: none yet, when the sequence started at 1).
   std::uint64_t last_seq() const { return seq_; }
+  // The next event gets `next` (>= 1) and the sequence goes on from there:
+  // a sequence kept across restarts (the gateway's state-dir) continues
+  // instead of starting at 1 again. Call before the first event.
+  void continue_sequence(std::uint64_t next) { seq_ = next == 0 ? 0 : next - 1; }
 
  private:
   void emit(EventBody body, can::Frame::Clock::time_point timestamp);

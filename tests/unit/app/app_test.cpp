@@ -30,6 +30,7 @@ struct DemoRig {
     // The requests here carry no token: they may do everything (the demo
     // alone lets them read; roles are tested in app_requests_test.cpp).
     c.mqtt.requests_role = Role::Admin;
+    c.state_dir.clear();  // keep no seq between tests (seq_store.hpp)
     log = std::make_unique<Logger>(LogLevel::Error);
     app = std::make_unique<App>(io, c, *log);
     app->add_consumer([this](const EncodedEventPtr& ev) { events.push_back(ev); });

@@ -306,7 +306,7 @@ TEST(Config, EdsFlagFileIsReadEvenWithDemoAlone) {
   std::filesystem::remove_all(dir);
 }
 
-TEST(Config, DemoAddsASimulatedNetworkWithoutAuth) {
+TEST(Config, DemoAddsASimulatedNetworkWithoutAuthOnLoopback) {
   CliOptions cli;
   cli.demo = true;
   const Config c = merge(Config{}, cli);
@@ -314,9 +314,40 @@ TEST(Config, DemoAddsASimulatedNetworkWithoutAuth) {
   EXPECT_TRUE(c.networks[0].simulated);
   EXPECT_EQ(c.networks[0].sync.period, 100ms) << "SYNC for the drive's synchronous TPDOs";
   EXPECT_TRUE(c.demo);
+  EXPECT_TRUE(c.http.loopback());
   EXPECT_FALSE(c.http.auth);
   EXPECT_FALSE(c.mqtt.enabled);  // MQTT only when asked for
   EXPECT_FALSE(c.gateway_id.empty());
+}
+
+// api-contract "Command line": --demo turns authentication off only on
+// loopback without tokens (issue 12 item 11).
+TEST(Config, DemoWithTokensRequiresThem) {
+  CliOptions cli;
+  cli.demo = true;
+  const Config c = merge(parse_config("http:\n  tokens:\n    - {name: a, role: viewer, sha256: "
+                                      "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n",
+                                      "gw.yaml"),
+                         cli);
+  EXPECT_TRUE(c.http.auth);
+  EXPECT_EQ(c.http.anonymous_role(), Role::None) << "a caller without a token gets nothing";
+}
+
+TEST(Config, DemoOffLoopbackWithoutTokensIsRefused) {
+  CliOptions cli;
+  cli.demo = true;
+  cli.http = "0.0.0.0:8080";
+  const auto error = merge_error(Config{}, cli);
+  EXPECT_THAT(error, HasSubstr("command line: http.tokens: none configured, and http.listen 0.0.0.0 is not loopback"));
+  EXPECT_THAT(error, HasSubstr("--demo turns authentication off on loopback only"));
+  EXPECT_EQ(error.find('\n'), std::string::npos) << "one line";
+  // From the file too; with tokens the normal rules go on (TLS or plain-http).
+  CliOptions demo_only;
+  demo_only.demo = true;
+  EXPECT_THAT(merge_error(parse_config("http: {listen: \"[::]:8080\"}\n", "gw.yaml"), demo_only),
+              HasSubstr("gw.yaml: http.tokens: none configured, and http.listen :: is not loopback"));
+  // Explicitly without authentication, as without --demo: allowed (not advised).
+  EXPECT_FALSE(merge(parse_config("http: {auth: false}\n", "gw.yaml"), cli).http.auth);
 }
 
 TEST(Config, SimulatedNetworksInTheFile) {
@@ -438,7 +469,8 @@ TEST(Config, ExampleFileInDeployIsValid) {
   EXPECT_FALSE(c.networks.empty());
 }
 
-// Under systemd's StateDirectory= the queue goes where systemd says.
+// Under systemd's StateDirectory= the queue goes where systemd says. Where
+// each directory came from is kept for messages.
 TEST(Config, StateDirectoryFromSystemd) {
   CliOptions cli;
   cli.can_interfaces = {"can0"};
@@ -447,10 +479,16 @@ TEST(Config, StateDirectoryFromSystemd) {
   ::unsetenv("STATE_DIRECTORY");
   EXPECT_EQ(c.state_dir, "/var/lib/canopen-gateway-x");
   EXPECT_EQ(c.mqtt.queue_dir, "/var/lib/canopen-gateway-x/mqtt-queue");
-  Config explicit_dir = parse_config("gateway: {state-dir: /srv/gw}\n", "gw.yaml");
+  EXPECT_THAT(c.state_dir_origin, HasSubstr("$STATE_DIRECTORY"));
+  EXPECT_THAT(c.queue_dir_origin, HasSubstr("mqtt.queue.dir not set"));
+  Config explicit_dir = parse_config("gateway: {state-dir: /srv/gw}\nmqtt:\n  uri: tcp://b:1\n  queue: {dir: q}\n",
+                                     "/etc/gw/gw.yaml");
   ::setenv("STATE_DIRECTORY", "/var/lib/canopen-gateway-x", 1);
-  EXPECT_EQ(merge(explicit_dir, cli).state_dir, "/srv/gw");  // the file wins
+  const Config from_file = merge(explicit_dir, cli);
   ::unsetenv("STATE_DIRECTORY");
+  EXPECT_EQ(from_file.state_dir, "/srv/gw");  // the file wins
+  EXPECT_EQ(from_file.state_dir_origin, "/etc/gw/gw.yaml:1: gateway.state-dir");
+  EXPECT_EQ(from_file.queue_dir_origin, "/etc/gw/gw.yaml:4: mqtt.queue.dir");
 }
 
 }  // namespace

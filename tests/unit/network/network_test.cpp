@@ -111,6 +111,19 @@ TEST(Network, EveryServiceReportsIntoOneStreamWithoutGaps) {
   EXPECT_TRUE(saw_operational);
 }
 
+// A sequence kept across restarts (the gateway's state-dir) goes on where
+// it was: the first event gets the given number, the next ones +1.
+TEST(Network, AContinuedSequenceStartsAtTheGivenNumber) {
+  Rig rig;
+  rig.net.continue_sequence(70'000);
+  rig.net.report(can::BusEvent{can::BusState::ErrorActive, can::BusState::Down});
+  rig.net.report(can::BusEvent{can::BusState::ErrorWarning, can::BusState::ErrorActive});
+  ASSERT_EQ(rig.events.size(), 2U);
+  EXPECT_EQ(rig.events[0].seq, 70'000U);
+  EXPECT_EQ(rig.events[1].seq, 70'001U);
+  EXPECT_EQ(rig.net.last_seq(), 70'001U);
+}
+
 TEST(Network, FrameEventsCarryTheFramesReceiveTimeAndTimerEventsTheWallTime) {
   Rig rig;
   rig.net.nmt().set_heartbeat_consumer(kDevice, 250ms);

@@ -46,6 +46,7 @@ struct RestRig {
     cli.demo = true;
     cli.gateway_id = "test";
     Config c = merge(Config{}, cli);
+    c.state_dir.clear();  // keep no seq between tests (seq_store.hpp)
     if (emcy_period.count() > 0) c.networks.at(0).simulation.emcy_period = emcy_period;
     c.http.rate_limit = 0;
     if (configure) configure(c);
