@@ -976,7 +976,7 @@ void HttpServer::Impl::note_refusal(const std::string& key, const std::string& m
   for (auto it = refusing.begin(); it != refusing.end();) it = now - it->second > kRefusalQuiet ? refusing.erase(it) : std::next(it);
   const auto [it, fresh] = refusing.try_emplace(key, now);
   it->second = now;
-  if (fresh && log) log->warn("http: " + message + " (counted in /metrics; logged again after a minute without)");
+  if (fresh && log) log->warn("http: " + message + " (counted in /metrics; logged again after a minute without refusals)");
 }
 
 void HttpServer::Impl::stop() {
