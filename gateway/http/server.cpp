@@ -547,7 +547,8 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
       if (is_state_changing(req->method) && !acceptable_body_type(req->header("content-type"), !req->body.empty())) {
         impl_->counters.refused_media_type.fetch_add(1, std::memory_order_relaxed);
         Response r = Response::problem(
-            415, "the body of " + req->method + " " + req->path + " must be application/json or application/x-protobuf");
+            415,
+            "the body of " + req->method + " " + req->path + " must be application/json or application/x-protobuf");
         r.headers.emplace_back("Accept", "application/json, application/x-protobuf");
         send(std::move(r));
         return;
@@ -973,10 +974,12 @@ bool HttpServer::Impl::evict_idle() {
 // Logs the first refusal of an episode; the counters have every one.
 void HttpServer::Impl::note_refusal(const std::string& key, const std::string& message) {
   const auto now = std::chrono::steady_clock::now();
-  for (auto it = refusing.begin(); it != refusing.end();) it = now - it->second > kRefusalQuiet ? refusing.erase(it) : std::next(it);
+  for (auto it = refusing.begin(); it != refusing.end();)
+    it = now - it->second > kRefusalQuiet ? refusing.erase(it) : std::next(it);
   const auto [it, fresh] = refusing.try_emplace(key, now);
   it->second = now;
-  if (fresh && log) log->warn("http: " + message + " (counted in /metrics; logged again after a minute without refusals)");
+  if (fresh && log)
+    log->warn("http: " + message + " (counted in /metrics; logged again after a minute without refusals)");
 }
 
 void HttpServer::Impl::stop() {
