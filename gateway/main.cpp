@@ -70,7 +70,10 @@ int run(const gateway::CliOptions& opts) {
   http_cfg.port = config.http.port;
   http_cfg.cert_file = config.http.cert_file;
   http_cfg.key_file = config.http.key_file;
+  http_cfg.host_names = config.http.host_names;
   http_cfg.allowed_origins = config.http.allowed_origins;
+  http_cfg.max_connections = config.http.max_connections;
+  http_cfg.max_connections_per_address = config.http.max_connections_per_address;
   http_cfg.static_dir = config.http.web_root.empty() ? default_web_root() : std::filesystem::path(config.http.web_root);
   if (http_cfg.static_dir.empty()) log.warn("http: no dashboard files found; set http.web-root");
   std::unique_ptr<gateway::http::HttpServer> http;

@@ -15,6 +15,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "request_checks.hpp"
+
 namespace gateway {
 
 namespace {
@@ -297,7 +299,8 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
 
 
 void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
-  a.expect_map({"listen", "tls", "allowed-origins", "tokens", "auth", "plain-http", "rate-limit", "web-root"});
+  a.expect_map({"listen", "tls", "host-names", "allowed-origins", "tokens", "auth", "plain-http", "rate-limit",
+                "web-root", "max-connections", "max-connections-per-address"});
   if (auto v = a.get("listen")) {
     if (!split_host_port(v->str(), h.address, h.port)) v->fail("'" + v->str() + "' is not ADDR:PORT");
   }
@@ -312,9 +315,24 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
     if (!fs::is_regular_file(h.cert_file, ec)) cert->fail("file '" + h.cert_file + "' not found");
     if (!fs::is_regular_file(h.key_file, ec)) key->fail("file '" + h.key_file + "' not found");
   }
-  if (auto o = a.get("allowed-origins")) {
-    for (const auto& item : o->items()) h.allowed_origins.push_back(item.str());
+  if (auto n = a.get("host-names")) {
+    for (const auto& item : n->items()) {
+      const auto name = item.str();
+      if (auto hp = http::parse_host(name); !hp || hp->port)
+        item.fail("'" + name + "' is not a host name or IP address (without a port)");
+      h.host_names.push_back(name);
+    }
   }
+  if (auto o = a.get("allowed-origins")) {
+    for (const auto& item : o->items()) {
+      const auto origin = item.str();
+      if (origin != "*" && !http::parse_origin(origin))
+        item.fail("'" + origin + "' is not an origin like https://host:port (or *)");
+      h.allowed_origins.push_back(origin);
+    }
+  }
+  if (auto v = a.get("max-connections")) h.max_connections = v->integer(1, 100'000);
+  if (auto v = a.get("max-connections-per-address")) h.max_connections_per_address = v->integer(0, 100'000);
   if (auto v = a.get("auth")) h.auth = v->boolean();
   if (auto v = a.get("plain-http")) h.plain_http = v->boolean();
   if (auto r = a.get("rate-limit")) {

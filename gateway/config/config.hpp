@@ -8,6 +8,7 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <optional>
@@ -129,7 +130,14 @@ struct HttpConfig {
   std::string address = "127.0.0.1";
   unsigned short port = 8080;
   std::string cert_file, key_file;  // HTTPS/WSS when both are set
+  // Names (or IP literals) besides the listen address that browsers may use
+  // in Host (421 for others), and origins besides the gateway's own from
+  // which browsers may change state or open the event stream (403 for
+  // others); see gateway/http/request_checks.hpp.
+  std::vector<std::string> host_names;
   std::vector<std::string> allowed_origins;
+  std::size_t max_connections = 256;              // HTTP + WebSocket; the longest idle one makes room
+  std::size_t max_connections_per_address = 32;   // per client address; 0 = no limit
   std::vector<TokenConfig> tokens;
   // On by default (off in --demo). With tokens, every request but the
   // dashboard's files and the OpenAPI document needs one. Without tokens

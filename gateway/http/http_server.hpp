@@ -53,17 +53,27 @@ struct HttpConfig {
   // Limit for the TLS handshake, for reading a request's body once its
   // header is in, for writing a response, and for the WebSocket handshake.
   std::chrono::milliseconds read_timeout{std::chrono::seconds(15)};
-  // Limit for receiving a request's header, from the end of the previous
+  // Limit for the first byte of a request, from the end of the previous
   // response (or the connection's start): an idle keep-alive connection is
   // closed after it. While a handler is pending the connection is not read
   // (requests are answered in order, one at a time).
   std::chrono::milliseconds idle_timeout{std::chrono::seconds(60)};
+  // Limit for the rest of the request's header, from its first byte: a
+  // client that sends its header slowly (slowloris) is closed after it.
+  std::chrono::milliseconds header_timeout{std::chrono::seconds(10)};
   // A handler that has not called its Responder by then gets a 500 sent
   // for it (its late answer is ignored).
   std::chrono::milliseconds handler_timeout{std::chrono::seconds(60)};
-  // HTTP and WebSocket connections together; beyond it new connections are
-  // closed at once (counted in connections_rejected).
+  // HTTP and WebSocket connections together. A new connection beyond it
+  // closes the connection that has been idle longest (an HTTP connection
+  // waiting for the first byte of a request, or for its TLS handshake); with
+  // none idle, the new one is closed at once. Closed connections go away
+  // asynchronously, so the count may exceed this for a moment.
   std::size_t max_connections = 256;
+  // HTTP and WebSocket connections of one client address (IPv4, or the whole
+  // IPv6 address); beyond it its new connections are closed at once, so one
+  // client cannot lock the others out. 0 = no limit.
+  std::size_t max_connections_per_address = 32;
 
   // Directory of the dashboard (see static_files.hpp); empty = none.
   std::filesystem::path static_dir;
@@ -74,11 +84,20 @@ struct HttpConfig {
   // "?format=protobuf" gives binary frames (ev->ws_binary) instead. The client
   // sends its filter as JSON text (schema: EventFilter in event_stream.hpp)
   // and gets {"subscribed":<filter>} or {"error":<problem>} back as text.
-  // Origins allowed to open it from a browser, e.g. "http://localhost:8080";
-  // "*" allows any. A request with an Origin header is also allowed when
-  // the origin's host:port equals its Host header (same origin, i.e. the
-  // dashboard served by this server). No Origin header (not a browser) is
-  // always allowed. Anything else: 403.
+
+  // Browsers (see OriginPolicy in request_checks.hpp). Every request's Host
+  // must be the server's own: the listen address (loopback: also localhost,
+  // 127.0.0.1, [::1]; wildcard: any IP literal, localhost, the machine's
+  // name) or one of host_names (names or IP literals, no port); otherwise
+  // 421 (400 when missing in HTTP/1.1 or malformed). A state-changing
+  // request (not GET/HEAD/OPTIONS) and the WebSocket upgrade with an Origin
+  // header must come from the server's own origin (scheme, host and port of
+  // the request's Host) or one of allowed_origins ("https://host:port";
+  // "*" allows any, i.e. turns the check off); otherwise 403. A state-
+  // changing request to a route whose body is not application/json or
+  // application/x-protobuf gets 415. The constructor throws
+  // std::invalid_argument for a malformed entry.
+  std::vector<std::string> host_names;
   std::vector<std::string> allowed_origins;
   // The server pings a client that has sent nothing for ws_ping_interval
   // and closes it when nothing (no pong) arrives within another interval.
@@ -96,8 +115,17 @@ struct HttpConfig {
 // Counters for /metrics. Snapshot, consistent per field only.
 struct HttpStats {
   std::uint64_t connections_accepted = 0;
-  std::uint64_t connections_rejected = 0;  // over max_connections
-  std::uint64_t connections_active = 0;    // HTTP + WebSocket
+  std::uint64_t connections_rejected = 0;              // closed at accept, both reasons:
+  std::uint64_t connections_rejected_per_address = 0;  //   its address had max_connections_per_address
+  std::uint64_t connections_rejected_full = 0;         //   max_connections open, none idle
+  std::uint64_t connections_evicted_idle = 0;  // idle ones closed to admit a new one
+  std::uint64_t connections_active = 0;        // HTTP + WebSocket
+  std::uint64_t connections_idle = 0;          // of those, waiting for a request
+  std::uint64_t header_timeouts = 0;           // closed after header_timeout
+  // Requests refused before their route ran: ambiguous framing (400),
+  // foreign or missing Host (421/400), foreign Origin (403), body media
+  // type (415).
+  std::uint64_t refused_framing = 0, refused_host = 0, refused_origin = 0, refused_media_type = 0;
   std::uint64_t tls_handshake_failures = 0;
   std::uint64_t ws_clients = 0;  // currently connected
   std::uint64_t ws_clients_total = 0;
@@ -110,7 +138,8 @@ struct HttpStats {
 class HttpServer {
  public:
   // Loads the TLS certificate and key when configured (throws
-  // std::runtime_error naming the file on failure). Does not bind yet.
+  // std::runtime_error naming the file on failure) and checks host_names
+  // and allowed_origins (std::invalid_argument). Does not bind yet.
   HttpServer(boost::asio::io_context& ioc, HttpConfig config, Logger* log = nullptr);
   ~HttpServer();  // stop()
   HttpServer(const HttpServer&) = delete;

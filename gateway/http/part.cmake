@@ -1,11 +1,12 @@
 # HTTP/1.1 + WebSocket server (REST routes, /api/v1/events, dashboard files).
 # Beast is instantiated in server.cpp only; the rest stays light to compile.
 find_package(OpenSSL REQUIRED)
-# Without Beast: request/response types, router, WebSocket filter, static
-# files (the fuzz build links only this).
+# Without Beast: request/response types, router, Host/Origin/framing checks,
+# WebSocket filter, static files (the fuzz build links only this).
 add_library(gateway_http_core STATIC
   ${CMAKE_CURRENT_LIST_DIR}/http_types.cpp
   ${CMAKE_CURRENT_LIST_DIR}/router.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/request_checks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/event_stream.cpp
   ${CMAKE_CURRENT_LIST_DIR}/static_files.cpp)
 target_include_directories(gateway_http_core PUBLIC ${CMAKE_CURRENT_LIST_DIR})

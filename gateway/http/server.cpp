@@ -22,10 +22,12 @@
 #include <boost/url/url_view.hpp>
 #include <optional>
 #include <stdexcept>
+#include <unistd.h>
 #include <unordered_map>
 
 #include "event_stream.hpp"
 #include "log.hpp"
+#include "request_checks.hpp"
 #include "router.hpp"
 #include "static_files.hpp"
 
@@ -45,9 +47,18 @@ namespace {
 
 constexpr std::string_view kEventsPath = "/api/v1/events";
 constexpr auto kCloseGrace = std::chrono::seconds(2);
+// A refusal of connections is logged once per episode: again only after
+// this long without refusals for that address (or for the full server).
+constexpr auto kRefusalQuiet = std::chrono::seconds(60);
+// First read of a request: whatever has arrived, up to this much.
+constexpr std::size_t kFirstRead = 4096;
+
+using SteadyTime = std::chrono::steady_clock::time_point;
 
 struct Counters {
-  std::atomic<std::uint64_t> accepted{0}, rejected{0}, active{0}, tls_failures{0};
+  std::atomic<std::uint64_t> accepted{0}, active{0}, tls_failures{0};
+  std::atomic<std::uint64_t> rejected_per_address{0}, rejected_full{0}, evicted_idle{0}, idle{0}, header_timeouts{0};
+  std::atomic<std::uint64_t> refused_framing{0}, refused_host{0}, refused_origin{0}, refused_media_type{0};
   std::atomic<std::uint64_t> ws_binary_clients{0};
   std::atomic<std::uint64_t> ws_clients{0}, ws_total{0}, ws_sent{0}, ws_dropped{0}, ws_closed_slow{0};
   std::array<std::atomic<std::uint64_t>, 600> by_status{};
@@ -61,7 +72,17 @@ class Closable {
  public:
   virtual ~Closable() = default;
   virtual void shutdown() = 0;
+  // Since when it has been waiting for a request (nullopt: busy, or not an
+  // HTTP connection): such a connection may be closed for a new one.
+  virtual std::optional<SteadyTime> idle_since() const { return std::nullopt; }
 };
+
+// The key of a client address for the per-address limit (an IPv4 client of
+// a dual-stack listener counts as its IPv4 address).
+std::string address_key(const net::ip::address& a) {
+  if (a.is_v6() && a.to_v6().is_v4_mapped()) return net::ip::make_address_v4(net::ip::v4_mapped, a.to_v6()).to_string();
+  return a.to_string();
+}
 
 std::string endpoint_string(const tcp::endpoint& ep) {
   const auto addr = ep.address();
@@ -76,11 +97,19 @@ bool iequals(std::string_view a, std::string_view b) { return beast::iequals(a, 
 class WsClient;
 
 struct HttpServer::Impl : std::enable_shared_from_this<HttpServer::Impl> {
-  Impl(net::io_context& io, HttpConfig c, Logger* l) : ioc(io), cfg(std::move(c)), log(l), acceptor(io), accept_timer(io) {}
+  Impl(net::io_context& io, HttpConfig c, Logger* l)
+      : ioc(io), cfg(std::move(c)), log(l), policy(policy_settings(cfg)), acceptor(io), accept_timer(io) {}
+
+  static OriginPolicy::Settings policy_settings(const HttpConfig& c) {
+    std::array<char, 256> name{};
+    if (::gethostname(name.data(), name.size() - 1) != 0) name[0] = '\0';
+    return {c.address, c.host_names, c.allowed_origins, std::string(name.data())};
+  }
 
   net::io_context& ioc;
   HttpConfig cfg;
   Logger* log;
+  OriginPolicy policy;
   std::optional<net::ssl::context> tls;
   tcp::acceptor acceptor;
   net::steady_timer accept_timer;  // back-off after EMFILE and the like
@@ -94,14 +123,46 @@ struct HttpServer::Impl : std::enable_shared_from_this<HttpServer::Impl> {
   std::unordered_map<std::uint64_t, std::weak_ptr<Closable>> connections;
   std::unordered_map<std::uint64_t, std::weak_ptr<WsClient>> ws_clients;
   std::vector<std::shared_ptr<WsClient>> publish_scratch;
+  // Open connections (HTTP and WebSocket) per client address (address_key).
+  std::unordered_map<std::string, std::size_t> per_address;
+  // Refusal episodes: client address ("" = server full) -> last refusal.
+  std::unordered_map<std::string, SteadyTime> refusing;
 
   void debug(const std::string& m) {
     if (log && log->enabled(LogLevel::Debug)) log->debug("http: " + m);
   }
   void do_accept();
   void on_accept(error_code ec, tcp::socket socket);
+  bool evict_idle();
+  void note_refusal(const std::string& key, const std::string& message);
   void stop();
 };
+
+namespace {
+
+// One connection's place in its client address's count, from accept to
+// close; the HTTP session hands it on to the WebSocket session it becomes.
+class AddressSlot {
+ public:
+  AddressSlot(std::shared_ptr<HttpServer::Impl> impl, std::string address)
+      : impl_(std::move(impl)), address_(std::move(address)) {
+    ++impl_->per_address[address_];
+  }
+  ~AddressSlot() {
+    auto it = impl_->per_address.find(address_);
+    if (it != impl_->per_address.end() && --it->second == 0) impl_->per_address.erase(it);
+  }
+  AddressSlot(const AddressSlot&) = delete;
+  AddressSlot& operator=(const AddressSlot&) = delete;
+
+ private:
+  std::shared_ptr<HttpServer::Impl> impl_;
+  std::string address_;
+};
+
+using SlotPtr = std::shared_ptr<AddressSlot>;
+
+}  // namespace
 
 namespace {
 
@@ -112,8 +173,9 @@ namespace {
 
 class WsClient : public Closable, public std::enable_shared_from_this<WsClient> {
  public:
-  WsClient(std::shared_ptr<HttpServer::Impl> impl, bool binary, std::string peer)
+  WsClient(std::shared_ptr<HttpServer::Impl> impl, SlotPtr slot, bool binary, std::string peer)
       : impl_(std::move(impl)),
+        slot_(std::move(slot)),
         binary_(binary),
         peer_(std::move(peer)),
         queue_(SendQueue::Limits{impl_->cfg.ws_queue_max_messages, impl_->cfg.ws_queue_max_bytes,
@@ -227,6 +289,7 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
   virtual void force_close() = 0;
 
   std::shared_ptr<HttpServer::Impl> impl_;
+  SlotPtr slot_;
   bool binary_;
   std::string peer_;
   SendQueue queue_;
@@ -244,8 +307,10 @@ namespace {
 template <class Stream>
 class WsSession final : public WsClient {
  public:
-  WsSession(std::shared_ptr<HttpServer::Impl> impl, Stream&& stream, bool binary, std::string peer)
-      : WsClient(std::move(impl), binary, std::move(peer)), ws_(std::move(stream)), kill_timer_(impl_->ioc) {}
+  WsSession(std::shared_ptr<HttpServer::Impl> impl, SlotPtr slot, Stream&& stream, bool binary, std::string peer)
+      : WsClient(std::move(impl), std::move(slot), binary, std::move(peer)),
+        ws_(std::move(stream)),
+        kill_timer_(impl_->ioc) {}
 
   void run(BeastRequest req) {
     const auto& cfg = impl_->cfg;
@@ -350,16 +415,24 @@ struct PendingReply {
 
 class Connection : public Closable, public std::enable_shared_from_this<Connection> {
  public:
-  Connection(std::shared_ptr<HttpServer::Impl> impl, std::string peer, bool tls)
-      : impl_(std::move(impl)), peer_(std::move(peer)), tls_(tls), handler_timer_(impl_->ioc), id_(impl_->next_id++) {
+  Connection(std::shared_ptr<HttpServer::Impl> impl, SlotPtr slot, std::string peer, bool tls)
+      : impl_(std::move(impl)),
+        slot_(std::move(slot)),
+        peer_(std::move(peer)),
+        tls_(tls),
+        handler_timer_(impl_->ioc),
+        id_(impl_->next_id++) {
     impl_->connections.emplace(id_, std::weak_ptr<Closable>());
   }
   ~Connection() override {
+    set_idle(false);
     impl_->connections.erase(id_);
     impl_->counters.active.fetch_sub(1, std::memory_order_relaxed);
   }
 
   void registered() { impl_->connections[id_] = weak_from_this(); }
+
+  std::optional<SteadyTime> idle_since() const override { return idle_since_; }
 
   // Sends `r` for the current request; ignored when it is not `pending`.
   void reply(const std::shared_ptr<PendingReply>& pending, Response r) {
@@ -370,6 +443,59 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
   }
 
  protected:
+  // Waiting for a request (true) or not. Staying idle keeps the first time.
+  void set_idle(bool idle) {
+    if (idle == idle_since_.has_value()) return;
+    if (idle) {
+      idle_since_ = std::chrono::steady_clock::now();
+      impl_->counters.idle.fetch_add(1, std::memory_order_relaxed);
+    } else {
+      idle_since_.reset();
+      impl_->counters.idle.fetch_sub(1, std::memory_order_relaxed);
+    }
+  }
+
+  // The checks a request's header must pass before its body is read: a
+  // refusal to send (the caller then closes the connection), or nullopt.
+  std::optional<Response> screen(const BeastRequest& breq) {
+    auto& c = impl_->counters;
+    HeaderFields fields;
+    for (const auto& f : breq) fields.emplace_back(f.name_string(), f.value());
+    if (auto why = framing_error(fields, breq.version())) {
+      c.refused_framing.fetch_add(1, std::memory_order_relaxed);
+      return Response::problem(400, "malformed request: " + *why);
+    }
+    std::optional<std::string_view> host;
+    if (auto it = breq.find(bhttp::field::host); it != breq.end()) host = it->value();
+    switch (impl_->policy.check_host(host, breq.version())) {
+      case OriginPolicy::HostVerdict::Own:
+        break;
+      case OriginPolicy::HostVerdict::Missing:
+        c.refused_host.fetch_add(1, std::memory_order_relaxed);
+        return Response::problem(400, "an HTTP/1.1 request needs a Host header");
+      case OriginPolicy::HostVerdict::Malformed:
+        c.refused_host.fetch_add(1, std::memory_order_relaxed);
+        return Response::problem(400, "malformed Host header");
+      case OriginPolicy::HostVerdict::Foreign:
+        c.refused_host.fetch_add(1, std::memory_order_relaxed);
+        impl_->debug("request from " + peer_ + " for host '" + std::string(*host) + "' refused");
+        return Response::problem(421, "this server does not answer for host '" + std::string(*host) +
+                                          "' (its listen address, or a name in http.host-names)");
+    }
+    // Browsers send Origin on these; a page from elsewhere may not act on
+    // the gateway or read its event stream.
+    if (is_state_changing(breq.method_string()) || websocket::is_upgrade(breq)) {
+      if (auto it = breq.find(bhttp::field::origin);
+          it != breq.end() && !impl_->policy.origin_allowed(it->value(), host, tls_)) {
+        c.refused_origin.fetch_add(1, std::memory_order_relaxed);
+        impl_->debug("request from " + peer_ + " with origin '" + std::string(it->value()) + "' refused");
+        return Response::problem(403, "cross-origin request from '" + std::string(it->value()) +
+                                          "' refused (not this server, nor in http.allowed-origins)");
+      }
+    }
+    return std::nullopt;
+  }
+
   void handle(BeastRequest&& breq) {
     keep_alive_ = breq.keep_alive();
     head_ = breq.method() == bhttp::verb::head;
@@ -416,6 +542,17 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     if (m.kind == Router::Match::Kind::Found) {
       req->params = std::move(m.params);
       req->route = std::move(m.pattern);
+      // A form or a text/plain fetch is a "simple" cross-site request even
+      // for browsers that send no Origin: the API reads only its own types.
+      if (is_state_changing(req->method) && !acceptable_body_type(req->header("content-type"), !req->body.empty())) {
+        impl_->counters.refused_media_type.fetch_add(1, std::memory_order_relaxed);
+        Response r = Response::problem(
+            415,
+            "the body of " + req->method + " " + req->path + " must be application/json or application/x-protobuf");
+        r.headers.emplace_back("Accept", "application/json, application/x-protobuf");
+        send(std::move(r));
+        return;
+      }
       if (auto denied = authorize(*req)) {
         send(std::move(*denied));
         return;
@@ -497,24 +634,9 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     }
   }
 
-  bool origin_allowed(const BeastRequest& breq) const {
-    auto it = breq.find(bhttp::field::origin);
-    if (it == breq.end()) return true;  // not a browser
-    const std::string_view origin = it->value();
-    for (const auto& a : impl_->cfg.allowed_origins)
-      if (a == "*" || iequals(a, origin)) return true;
-    auto u = boost::urls::parse_uri(origin);
-    auto host = breq.find(bhttp::field::host);
-    if (!u || host == breq.end() || !u->has_authority()) return false;
-    return iequals(u->encoded_host_and_port(), host->value());
-  }
-
   void handle_upgrade(BeastRequest&& breq, Request& req) {
     keep_alive_ = false;  // any answer but 101 ends the connection
-    if (!origin_allowed(breq)) {
-      send(Response::problem(403, "origin not allowed"));
-      return;
-    }
+    // Host and Origin: checked with the header (screen()).
     if (auto denied = authorize(req)) {
       send(std::move(*denied));
       return;
@@ -563,8 +685,10 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
   virtual void upgrade(BeastRequest&& req, bool binary) = 0;
 
   std::shared_ptr<HttpServer::Impl> impl_;
+  SlotPtr slot_;
   std::string peer_;
   bool tls_;
+  std::optional<SteadyTime> idle_since_;
   bool keep_alive_ = true;
   bool head_ = false;
   unsigned version_ = 11;
@@ -576,13 +700,15 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
 template <class Stream>
 class HttpSession final : public Connection {
  public:
-  HttpSession(std::shared_ptr<HttpServer::Impl> impl, Stream&& stream, std::string peer)
-      : Connection(std::move(impl), std::move(peer), std::is_same_v<Stream, TlsStream>), stream_(std::move(stream)) {}
+  HttpSession(std::shared_ptr<HttpServer::Impl> impl, SlotPtr slot, Stream&& stream, std::string peer)
+      : Connection(std::move(impl), std::move(slot), std::move(peer), std::is_same_v<Stream, TlsStream>),
+        stream_(std::move(stream)) {}
 
   void run() {
     registered();
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     if constexpr (std::is_same_v<Stream, TlsStream>) {
+      set_idle(true);  // no request yet; whether a handshake has begun is unknown
       beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
       stream_.async_handshake(net::ssl::stream_base::server, [self](error_code ec) {
         if (ec) {
@@ -611,9 +737,34 @@ class HttpSession final : public Connection {
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(impl_->cfg.max_header_bytes));
     parser_->body_limit(impl_->cfg.max_body_bytes);
+    if (buffer_.size() > 0) {  // pipelined: the next request has begun
+      read_header();
+      return;
+    }
+    // Idle until the first byte: this connection may be closed for a new
+    // one meanwhile (Impl::evict_idle).
+    set_idle(true);
     beast::get_lowest_layer(stream_).expires_after(impl_->cfg.idle_timeout);
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
-    bhttp::async_read_header(stream_, buffer_, *parser_, [self](error_code ec, std::size_t) { self->on_header(ec); });
+    stream_.async_read_some(buffer_.prepare(kFirstRead), [self](error_code ec, std::size_t n) {
+      self->set_idle(false);
+      if (ec) return self->close_now();  // end of stream, idle timeout, evicted
+      self->buffer_.commit(n);
+      self->read_header();
+    });
+  }
+
+  // From the request's first byte, the whole header within header_timeout.
+  void read_header() {
+    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.header_timeout);
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    bhttp::async_read_header(stream_, buffer_, *parser_, [self](error_code ec, std::size_t) {
+      if (ec == beast::error::timeout) {
+        self->impl_->counters.header_timeouts.fetch_add(1, std::memory_order_relaxed);
+        self->impl_->debug("closing " + self->peer_ + ": request header not complete in time");
+      }
+      self->on_header(ec);
+    });
   }
 
   void on_header(error_code ec) {
@@ -623,6 +774,14 @@ class HttpSession final : public Connection {
     }
     beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
     const auto& req = parser_->get();
+    head_ = req.method() == bhttp::verb::head;
+    version_ = req.version();
+    if (auto refused = screen(req)) {
+      // The body (or what follows) is not read: it may be anything.
+      keep_alive_ = false;
+      send(std::move(*refused));
+      return;
+    }
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     if (!parser_->is_done() && iequals(req[bhttp::field::expect], "100-continue")) {
       // curl and others wait for this before sending a larger body.
@@ -687,7 +846,7 @@ class HttpSession final : public Connection {
   void upgrade(BeastRequest&& req, bool binary) override {
     beast::get_lowest_layer(stream_).expires_never();
     upgraded_ = true;
-    auto ws = std::make_shared<WsSession<Stream>>(impl_, std::move(stream_), binary, peer_);
+    auto ws = std::make_shared<WsSession<Stream>>(impl_, slot_, std::move(stream_), binary, peer_);
     ws->run(std::move(req));
   }
 
@@ -714,6 +873,7 @@ class HttpSession final : public Connection {
   }
 
   void close_now() {
+    set_idle(false);
     if (upgraded_) return;  // the stream now belongs to the WebSocket session
     error_code ignored;
     beast::get_lowest_layer(stream_).socket().close(ignored);
@@ -751,29 +911,75 @@ void HttpServer::Impl::on_accept(error_code ec, tcp::socket socket) {
     return;
   }
   counters.accepted.fetch_add(1, std::memory_order_relaxed);
-  if (counters.active.load(std::memory_order_relaxed) >= cfg.max_connections) {
-    counters.rejected.fetch_add(1, std::memory_order_relaxed);
-    error_code ignored;
+  error_code pec;
+  const auto ep = socket.remote_endpoint(pec);
+  error_code ignored;
+  if (pec) {  // gone already
     socket.close(ignored);
+    return do_accept();
+  }
+  std::string address = address_key(ep.address());
+  const auto held = per_address.find(address);
+  if (cfg.max_connections_per_address > 0 && held != per_address.end() &&
+      held->second >= cfg.max_connections_per_address) {
+    counters.rejected_per_address.fetch_add(1, std::memory_order_relaxed);
+    socket.close(ignored);
+    note_refusal(address, "client " + address + " has " + std::to_string(held->second) +
+                              " connections open (http.max-connections-per-address): closing its new ones");
+    return do_accept();
+  }
+  if (counters.active.load(std::memory_order_relaxed) >= cfg.max_connections && !evict_idle()) {
+    counters.rejected_full.fetch_add(1, std::memory_order_relaxed);
+    socket.close(ignored);
+    note_refusal("", std::to_string(cfg.max_connections) +
+                         " connections open, none idle (http.max-connections): closing new ones");
+    return do_accept();
+  }
+  std::string peer = endpoint_string(ep);
+  auto slot = std::make_shared<AddressSlot>(shared_from_this(), std::move(address));
+  socket.set_option(tcp::no_delay(true), ignored);
+  counters.active.fetch_add(1, std::memory_order_relaxed);
+  if (tls) {
+    auto s = std::make_shared<HttpSession<TlsStream>>(shared_from_this(), std::move(slot),
+                                                      TlsStream(beast::tcp_stream(std::move(socket)), *tls),
+                                                      std::move(peer));
+    s->run();
   } else {
-    error_code pec;
-    const auto ep = socket.remote_endpoint(pec);
-    std::string peer = pec ? std::string("?") : endpoint_string(ep);
-    error_code ignored;
-    socket.set_option(tcp::no_delay(true), ignored);
-    counters.active.fetch_add(1, std::memory_order_relaxed);
-    if (tls) {
-      auto s = std::make_shared<HttpSession<TlsStream>>(shared_from_this(),
-                                                        TlsStream(beast::tcp_stream(std::move(socket)), *tls),
-                                                        std::move(peer));
-      s->run();
-    } else {
-      auto s = std::make_shared<HttpSession<beast::tcp_stream>>(shared_from_this(),
-                                                                beast::tcp_stream(std::move(socket)), std::move(peer));
-      s->run();
-    }
+    auto s = std::make_shared<HttpSession<beast::tcp_stream>>(shared_from_this(), std::move(slot),
+                                                              beast::tcp_stream(std::move(socket)), std::move(peer));
+    s->run();
   }
   do_accept();
+}
+
+// Closes the connection that has waited longest for a request, if any.
+bool HttpServer::Impl::evict_idle() {
+  std::shared_ptr<Closable> oldest;
+  SteadyTime since{};
+  for (auto& [id, w] : connections) {
+    auto c = w.lock();
+    if (!c) continue;
+    if (auto t = c->idle_since(); t && (!oldest || *t < since)) {
+      oldest = std::move(c);
+      since = *t;
+    }
+  }
+  if (!oldest) return false;
+  counters.evicted_idle.fetch_add(1, std::memory_order_relaxed);
+  debug("server full: closing the longest idle connection for a new one");
+  oldest->shutdown();
+  return true;
+}
+
+// Logs the first refusal of an episode; the counters have every one.
+void HttpServer::Impl::note_refusal(const std::string& key, const std::string& message) {
+  const auto now = std::chrono::steady_clock::now();
+  for (auto it = refusing.begin(); it != refusing.end();)
+    it = now - it->second > kRefusalQuiet ? refusing.erase(it) : std::next(it);
+  const auto [it, fresh] = refusing.try_emplace(key, now);
+  it->second = now;
+  if (fresh && log)
+    log->warn("http: " + message + " (counted in /metrics; logged again after a minute without refusals)");
 }
 
 void HttpServer::Impl::stop() {
@@ -862,8 +1068,17 @@ HttpStats HttpServer::stats() const {
   const auto& c = impl_->counters;
   HttpStats s;
   s.connections_accepted = c.accepted.load(std::memory_order_relaxed);
-  s.connections_rejected = c.rejected.load(std::memory_order_relaxed);
+  s.connections_rejected_per_address = c.rejected_per_address.load(std::memory_order_relaxed);
+  s.connections_rejected_full = c.rejected_full.load(std::memory_order_relaxed);
+  s.connections_rejected = s.connections_rejected_per_address + s.connections_rejected_full;
+  s.connections_evicted_idle = c.evicted_idle.load(std::memory_order_relaxed);
   s.connections_active = c.active.load(std::memory_order_relaxed);
+  s.connections_idle = c.idle.load(std::memory_order_relaxed);
+  s.header_timeouts = c.header_timeouts.load(std::memory_order_relaxed);
+  s.refused_framing = c.refused_framing.load(std::memory_order_relaxed);
+  s.refused_host = c.refused_host.load(std::memory_order_relaxed);
+  s.refused_origin = c.refused_origin.load(std::memory_order_relaxed);
+  s.refused_media_type = c.refused_media_type.load(std::memory_order_relaxed);
   s.tls_handshake_failures = c.tls_failures.load(std::memory_order_relaxed);
   s.ws_clients = c.ws_clients.load(std::memory_order_relaxed);
   s.ws_clients_total = c.ws_total.load(std::memory_order_relaxed);

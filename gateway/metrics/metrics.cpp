@@ -276,6 +276,33 @@ std::string render_metrics(const MetricsSnapshot& s) {
   const std::string http = "canopen_gateway_http_responses_total";
   w.family(http, "HTTP responses by status code.", C);
   for (const auto& [code, n] : s.http_responses_by_status) w.sample(http, {{"code", integer_text(code)}}, n);
+  if (const auto& hc = s.http_connections) {
+    const std::string conns = "canopen_gateway_http_connections";
+    w.family(conns, "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.", G);
+    w.sample(conns, {{"state", "open"}}, hc->open);
+    w.sample(conns, {{"state", "idle"}}, hc->idle);
+    const std::string refused = "canopen_gateway_http_connections_refused_total";
+    w.family(refused,
+             "New connections closed at once: their client address had http.max-connections-per-address open "
+             "(per-address), or http.max-connections were open and none idle (full).",
+             C);
+    w.sample(refused, {{"reason", "per-address"}}, hc->refused_per_address);
+    w.sample(refused, {{"reason", "full"}}, hc->refused_full);
+    w.single("canopen_gateway_http_connections_evicted_total",
+             "Idle connections closed to admit a new one at http.max-connections.", C, hc->evicted_idle);
+    w.single("canopen_gateway_http_header_timeouts_total",
+             "Connections closed because a request header did not arrive in time (slow clients).", C,
+             hc->header_timeouts);
+    const std::string req = "canopen_gateway_http_requests_refused_total";
+    w.family(req,
+             "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
+             "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).",
+             C);
+    w.sample(req, {{"reason", "framing"}}, hc->refused_framing);
+    w.sample(req, {{"reason", "host"}}, hc->refused_host);
+    w.sample(req, {{"reason", "origin"}}, hc->refused_origin);
+    w.sample(req, {{"reason", "media-type"}}, hc->refused_media_type);
+  }
 
   w.single("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", G, s.uptime_seconds);
   return w.str();

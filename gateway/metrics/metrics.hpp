@@ -102,6 +102,17 @@ struct NetworkMetrics {
   std::uint64_t events = 0;    // events produced by this network
 };
 
+// The HTTP server's connection handling (HttpStats).
+struct HttpConnectionMetrics {
+  std::uint64_t open = 0, idle = 0;  // now; idle: waiting for a request
+  std::uint64_t refused_per_address = 0, refused_full = 0;  // closed at accept
+  std::uint64_t evicted_idle = 0;     // idle ones closed to admit a new one
+  std::uint64_t header_timeouts = 0;  // request header sent too slowly
+  // Requests refused before their route: ambiguous framing, foreign Host,
+  // foreign Origin, body media type.
+  std::uint64_t refused_framing = 0, refused_host = 0, refused_origin = 0, refused_media_type = 0;
+};
+
 struct MetricsSnapshot {
   std::string version;  // build_info version label; empty = no build_info family
   std::vector<NetworkMetrics> networks;
@@ -129,6 +140,7 @@ struct MetricsSnapshot {
   std::uint64_t mqtt_requests_refused = 0;  // dropped unanswered for their reply address
   std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
   std::map<int, std::uint64_t> http_responses_by_status;  // 200 -> n
+  std::optional<HttpConnectionMetrics> http_connections;   // nullopt = no such families
   double uptime_seconds = 0.0;
 };
 

@@ -62,6 +62,17 @@ http::Response metrics_response(const App& app, const http::HttpServer& server) 
   s.ws_messages_sent = hs.ws_messages_sent;
   s.ws_messages_dropped = hs.ws_messages_dropped;
   s.http_responses_by_status = hs.responses_by_status;
+  auto& hc = s.http_connections.emplace();
+  hc.open = hs.connections_active;
+  hc.idle = hs.connections_idle;
+  hc.refused_per_address = hs.connections_rejected_per_address;
+  hc.refused_full = hs.connections_rejected_full;
+  hc.evicted_idle = hs.connections_evicted_idle;
+  hc.header_timeouts = hs.header_timeouts;
+  hc.refused_framing = hs.refused_framing;
+  hc.refused_host = hs.refused_host;
+  hc.refused_origin = hs.refused_origin;
+  hc.refused_media_type = hs.refused_media_type;
   s.uptime_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - app.started_at()).count();
   http::Response r;
   r.status = 200;

@@ -386,6 +386,29 @@ TEST(Config, AnOpenListenerNeedsTokensAndTls) {
   EXPECT_NO_THROW(merge(open, cli));
 }
 
+TEST(Config, BrowserHostsOriginsAndConnectionLimits) {
+  const Config c = parse_config(
+      "http:\n  host-names: [gw.plant.example, 10.9.8.7]\n  allowed-origins: [https://scada.example, '*']\n"
+      "  max-connections: 64\n  max-connections-per-address: 8\n",
+      "gw.yaml");
+  EXPECT_EQ(c.http.host_names, (std::vector<std::string>{"gw.plant.example", "10.9.8.7"}));
+  EXPECT_EQ(c.http.allowed_origins, (std::vector<std::string>{"https://scada.example", "*"}));
+  EXPECT_EQ(c.http.max_connections, 64U);
+  EXPECT_EQ(c.http.max_connections_per_address, 8U);
+  const Config d = parse_config("", "gw.yaml");
+  EXPECT_TRUE(d.http.host_names.empty());
+  EXPECT_EQ(d.http.max_connections, 256U);
+  EXPECT_EQ(d.http.max_connections_per_address, 32U);
+  EXPECT_THAT(config_error("http:\n  host-names: [gw.example:8080]\n"),
+              HasSubstr("gw.yaml:2: http.host-names[0]: 'gw.example:8080' is not a host name or IP address"));
+  EXPECT_THAT(config_error("http:\n  host-names: ['http://gw.example']\n"), HasSubstr("http.host-names[0]"));
+  EXPECT_THAT(config_error("http:\n  allowed-origins: [scada.example]\n"),
+              HasSubstr("http.allowed-origins[0]: 'scada.example' is not an origin like https://host:port"));
+  EXPECT_THAT(config_error("http:\n  allowed-origins: ['https://scada.example/app']\n"),
+              HasSubstr("http.allowed-origins[0]"));
+  EXPECT_THAT(config_error("http: {max-connections: 0}\n"), HasSubstr("http.max-connections: 0 is out of range"));
+}
+
 TEST(Config, RolesOfCallersWithoutToken) {
   CliOptions cli;
   cli.can_interfaces = {"can0"};

@@ -3,6 +3,8 @@
 // own io_context and a deadline on every operation, so nothing can hang.
 #include "http_server.hpp"
 
+#include "log.hpp"
+
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <openssl/evp.h>
@@ -23,6 +25,7 @@
 #include <boost/json/serialize.hpp>
 #include <boost/json/value.hpp>
 #include <boost/json/value_to.hpp>
+#include <atomic>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -55,10 +58,11 @@ namespace {
 
 class TestServer {
  public:
-  explicit TestServer(HttpConfig cfg, const std::function<void(HttpServer&)>& setup = {}) {
+  explicit TestServer(HttpConfig cfg, const std::function<void(HttpServer&)>& setup = {},
+                      gateway::Logger* log = nullptr) {
     cfg.address = "127.0.0.1";
     cfg.port = 0;
-    server_ = std::make_unique<HttpServer>(ioc_, std::move(cfg));
+    server_ = std::make_unique<HttpServer>(ioc_, std::move(cfg), log);
     if (setup) setup(*server_);
     server_->start();
     thread_ = std::thread([this] { ioc_.run(); });
@@ -151,14 +155,20 @@ class Driver {
 
 class HttpClient : public Driver {
  public:
-  explicit HttpClient(std::uint16_t port) : stream(ioc) {
+  // `from`: the client's own address (any of 127/8 is loopback on Linux),
+  // to be a different client address than 127.0.0.1.
+  explicit HttpClient(std::uint16_t port, const char* from = nullptr) : stream(ioc), host("127.0.0.1:" + std::to_string(port)) {
+    if (from != nullptr) {
+      stream.socket().open(tcp::v4());
+      stream.socket().bind({net::ip::make_address(from), 0});
+    }
     ec = run([&](auto h) { stream.socket().async_connect({net::ip::make_address("127.0.0.1"), port}, h); }, cancel());
   }
 
   bhttp::response<bhttp::string_body> request(bhttp::verb verb, std::string target, std::string body = {},
                                               std::vector<std::pair<std::string, std::string>> fields = {}) {
     bhttp::request<bhttp::string_body> req{verb, target, 11};
-    req.set(bhttp::field::host, "127.0.0.1");
+    req.set(bhttp::field::host, host);
     for (auto& [k, v] : fields) req.set(k, v);
     if (!body.empty() || verb == bhttp::verb::put || verb == bhttp::verb::post) {
       req.body() = std::move(body);
@@ -204,6 +214,7 @@ class HttpClient : public Driver {
   }
 
   beast::tcp_stream stream;
+  std::string host;  // the Host header of request()
   beast::flat_buffer buffer;
   error_code ec;
 };
@@ -211,7 +222,7 @@ class HttpClient : public Driver {
 class WsClient : public Driver {
  public:
   explicit WsClient(std::uint16_t port, std::string target = "/api/v1/events",
-                    std::optional<std::string> origin = std::nullopt, int rcvbuf = 0)
+                    std::optional<std::string> origin = std::nullopt, int rcvbuf = 0, std::string host = {})
       : ws(ioc) {
     auto& sock = beast::get_lowest_layer(ws).socket();
     if (rcvbuf > 0) {
@@ -226,8 +237,8 @@ class WsClient : public Driver {
     ws.control_callback([this](websocket::frame_type t, beast::string_view) {
       if (t == websocket::frame_type::ping) ++pings;
     });
-    ec = run([&](auto h) { ws.async_handshake(response, "127.0.0.1:" + std::to_string(port), target, h); },
-             cancel());
+    if (host.empty()) host = "127.0.0.1:" + std::to_string(port);
+    ec = run([&](auto h) { ws.async_handshake(response, host, target, h); }, cancel());
   }
 
   // Reads one message; its text in `out`.
@@ -358,9 +369,9 @@ TEST(HttpServer, BodyOverLimitIs413) {
   TestServer ts(cfg, [](HttpServer& s) { s.add_route("POST", "/x", echo); });
   {
     HttpClient c(ts.port());
-    auto res = c.request(bhttp::verb::post, "/x", std::string(1024, 'a'));
+    auto res = c.request(bhttp::verb::post, "/x", std::string(1024, 'a'), {{"Content-Type", "application/json"}});
     EXPECT_EQ(res.result_int(), 200u);
-    res = c.request(bhttp::verb::post, "/x", std::string(1025, 'a'));
+    res = c.request(bhttp::verb::post, "/x", std::string(1025, 'a'), {{"Content-Type", "application/json"}});
     EXPECT_EQ(res.result_int(), 413u);
     EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json");
     EXPECT_FALSE(res.keep_alive());
@@ -368,12 +379,12 @@ TEST(HttpServer, BodyOverLimitIs413) {
   {
     // Announced length alone is enough; the body is never read.
     HttpClient c(ts.port());
-    auto out = c.raw("POST /x HTTP/1.1\r\nHost: a\r\nContent-Length: 100000000\r\n\r\n");
+    auto out = c.raw("POST /x HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 100000000\r\n\r\n");
     EXPECT_EQ(out.rfind("HTTP/1.1 413 ", 0), 0u) << out;
   }
   {
     HttpClient c(ts.port());
-    auto out = c.raw("POST /x HTTP/1.1\r\nHost: a\r\nTransfer-Encoding: chunked\r\n\r\n800\r\n" +
+    auto out = c.raw("POST /x HTTP/1.1\r\nHost: 127.0.0.1\r\nTransfer-Encoding: chunked\r\n\r\n800\r\n" +
                      std::string(0x800, 'b') + "\r\n0\r\n\r\n");
     EXPECT_EQ(out.rfind("HTTP/1.1 413 ", 0), 0u) << out;
   }
@@ -385,7 +396,7 @@ TEST(HttpServer, HeaderOverLimitIs431AndGarbageIs400) {
   TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); });
   {
     HttpClient c(ts.port());
-    auto out = c.raw("GET /x HTTP/1.1\r\nHost: a\r\nX-Big: " + std::string(2000, 'h') + "\r\n\r\n");
+    auto out = c.raw("GET /x HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Big: " + std::string(2000, 'h') + "\r\n\r\n");
     EXPECT_EQ(out.rfind("HTTP/1.1 431 ", 0), 0u) << out;
   }
   {
@@ -449,6 +460,7 @@ TEST(HttpServer, AsyncHandlerAnswersLaterWithoutBlockingTheLoop) {
   // so the connection ends here through stop().)
   HttpClient gone(ts.port());
   bhttp::request<bhttp::string_body> req{bhttp::verb::get, "/never", 11};
+  req.set(bhttp::field::host, gone.host);
   gone.ec = gone.run([&](auto h) { bhttp::async_write(gone.stream, req, h); }, gone.cancel());
   ASSERT_FALSE(gone.ec);
   ASSERT_TRUE(ts.wait_until([&] {
@@ -508,17 +520,246 @@ TEST(HttpServer, AuthorizerRunsBeforeRoutes) {
   EXPECT_EQ(ws.response.result_int(), 401u);
 }
 
-TEST(HttpServer, MaxConnections) {
+// --- connection limits --------------------------------------------------------
+
+// At max_connections a new client closes the connection that has waited
+// longest for a request, instead of being locked out.
+TEST(HttpServer, AtMaxConnectionsTheLongestIdleConnectionMakesRoom) {
   HttpConfig cfg = quick_config();
   cfg.max_connections = 2;
   TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); });
-  HttpClient a(ts.port()), b(ts.port());
+  HttpClient a(ts.port());
   EXPECT_EQ(a.get("/x").result_int(), 200u);
+  HttpClient b(ts.port());
   EXPECT_EQ(b.get("/x").result_int(), 200u);
+  ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().connections_idle == 2; }));
   HttpClient c(ts.port());
-  c.get("/x");
-  EXPECT_TRUE(c.ec);  // closed at once
-  EXPECT_EQ(ts.server().stats().connections_rejected, 1u);
+  EXPECT_EQ(c.get("/x").result_int(), 200u);
+  a.get("/x");
+  EXPECT_TRUE(a.ec) << "the longest idle connection was closed";
+  EXPECT_EQ(b.get("/x").result_int(), 200u);
+  const auto st = ts.server().stats();
+  EXPECT_EQ(st.connections_evicted_idle, 1u);
+  EXPECT_EQ(st.connections_rejected, 0u);
+}
+
+// Connections busy with a request are not idle: with no idle one to close,
+// a new connection is closed at once.
+TEST(HttpServer, AtMaxConnectionsWithNoneIdleTheNewOneIsClosed) {
+  HttpConfig cfg = quick_config();
+  cfg.max_connections = 2;
+  std::vector<Responder> parked;
+  TestServer ts(cfg, [&](HttpServer& s) {
+    s.add_route("GET", "/never", [&](const Request&, Responder done) { parked.push_back(std::move(done)); });
+  });
+  HttpClient a(ts.port()), b(ts.port());
+  for (HttpClient* c : {&a, &b}) {
+    bhttp::request<bhttp::string_body> req{bhttp::verb::get, "/never", 11};
+    req.set(bhttp::field::host, c->host);
+    ASSERT_FALSE(c->run([&](auto h) { bhttp::async_write(c->stream, req, h); }, c->cancel()));
+  }
+  ASSERT_TRUE(ts.wait_until([&] {
+    std::size_t n = 0;
+    ts.on_io([&] { n = parked.size(); });
+    return n == 2;
+  }));
+  HttpClient c(ts.port());
+  c.get("/never");
+  EXPECT_TRUE(c.ec);
+  EXPECT_NE(c.ec, net::error::timed_out) << "closed at once, not left waiting";
+  const auto st = ts.server().stats();
+  EXPECT_EQ(st.connections_rejected_full, 1u);
+  EXPECT_EQ(st.connections_rejected, 1u);
+  EXPECT_EQ(st.connections_evicted_idle, 0u);
+}
+
+// One client address holding its whole share (idle, as a slowloris client
+// would) does not lock out another address; its extra connections are
+// closed at once and logged once, not once per connection.
+TEST(HttpServer, OneClientAddressCannotHoldTheServer) {
+  HttpConfig cfg = quick_config();
+  cfg.max_connections_per_address = 3;
+  std::FILE* log_file = std::tmpfile();
+  ASSERT_NE(log_file, nullptr);
+  {
+    gateway::Logger log(gateway::LogLevel::Info, log_file);
+    TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); }, &log);
+    std::vector<std::unique_ptr<HttpClient>> held;
+    for (int i = 0; i < 3; ++i) held.push_back(std::make_unique<HttpClient>(ts.port()));
+    ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().connections_accepted == 3; }));
+    for (int i = 0; i < 4; ++i) {
+      HttpClient extra(ts.port());
+      extra.get("/x");
+      EXPECT_TRUE(extra.ec) << i;
+      EXPECT_NE(extra.ec, net::error::timed_out) << "closed at once, not left waiting";
+    }
+    HttpClient other(ts.port(), "127.0.0.2");
+    ASSERT_FALSE(other.ec) << other.ec.message();
+    EXPECT_EQ(other.get("/x").result_int(), 200u);
+    // Its own connections still work, and once one is closed it may open another.
+    EXPECT_EQ(held[0]->get("/x").result_int(), 200u);
+    held.pop_back();
+    ASSERT_TRUE(ts.wait_until([&] { return ts.server().stats().connections_active == 3; }));
+    HttpClient again(ts.port());
+    EXPECT_EQ(again.get("/x").result_int(), 200u);
+    const auto st = ts.server().stats();
+    EXPECT_EQ(st.connections_rejected_per_address, 4u);
+    EXPECT_EQ(st.connections_rejected_full, 0u);
+  }
+  std::rewind(log_file);
+  std::string text;
+  for (int ch; (ch = std::fgetc(log_file)) != EOF;) text.push_back(static_cast<char>(ch));
+  std::fclose(log_file);
+  std::size_t lines = 0;
+  for (auto p = text.find("client 127.0.0.1 has 3 connections open"); p != std::string::npos;
+       p = text.find("client 127.0.0.1 has 3 connections open", p + 1))
+    ++lines;
+  EXPECT_EQ(lines, 1u) << text;
+}
+
+// A client that sends its header a little at a time is closed after
+// header_timeout, long before idle_timeout.
+TEST(HttpServer, SlowHeaderIsClosedAfterHeaderTimeout) {
+  HttpConfig cfg = quick_config();
+  cfg.header_timeout = 300ms;
+  cfg.idle_timeout = 60s;
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/x", echo); });
+  net::io_context io;
+  tcp::socket slow(io);
+  slow.connect({net::ip::make_address("127.0.0.1"), ts.port()});
+  std::atomic<bool> done{false};
+  std::thread trickle([&] {
+    error_code ec;
+    net::write(slow, net::buffer(std::string_view("GET /x HTTP/1.1\r\nHost: 127.0.0.1\r\n")), ec);
+    for (int i = 0; i < 400 && !done && !ec; ++i) {
+      net::write(slow, net::buffer(std::string_view("X-Slow: 1\r\n")), ec);
+      std::this_thread::sleep_for(10ms);
+    }
+  });
+  EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().header_timeouts == 1; }));
+  EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().connections_active == 0; }));
+  done = true;
+  trickle.join();
+  // Others are served as usual.
+  HttpClient c(ts.port());
+  EXPECT_EQ(c.get("/x").result_int(), 200u);
+}
+
+// --- strictness ------------------------------------------------------------------
+
+// Every ambiguous way to frame a request gets 400 and the connection ends:
+// what follows (here a smuggled second request) is never parsed.
+TEST(HttpServer, AmbiguousFramingIs400AndClosesTheConnection) {
+  int handled = 0;
+  TestServer ts(quick_config(), [&](HttpServer& s) {
+    s.add_route("POST", "/x", [&](const Request& r, Responder done) {
+      ++handled;
+      echo(r, std::move(done));
+    });
+    s.add_route("GET", "/smuggled", [&](const Request& r, Responder done) {
+      ++handled;
+      echo(r, std::move(done));
+    });
+  });
+  const std::string head = "POST /x HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Type: application/json\r\n";
+  const std::string smuggled = "GET /smuggled HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n";
+  for (const std::string fields : {"Transfer-Encoding: xchunked\r\n",
+                                   "Transfer-Encoding: chunked, identity\r\n",
+                                   "Transfer-Encoding: identity\r\n",
+                                   "Transfer-Encoding: chunked\r\nTransfer-Encoding: chunked\r\n",
+                                   "Transfer-Encoding: chunked\r\nContent-Length: 5\r\n",
+                                   "Content-Length: 5\r\nTransfer-Encoding: chunked\r\n",
+                                   "Content-Length: 0\r\nContent-Length: 5\r\n",
+                                   "Content-Length: 5\r\nAuthorization: Bearer a\r\nAuthorization: Bearer b\r\n",
+                                   "Content-Length: 5\r\nHost: 127.0.0.1\r\n"}) {
+    HttpClient c(ts.port());
+    const auto out = c.raw(head + fields + "\r\n0\r\n\r\n" + smuggled);
+    EXPECT_EQ(out.rfind("HTTP/1.1 400 ", 0), 0u) << fields << out;
+    EXPECT_EQ(out.find("HTTP/1.1 ", 1), std::string::npos) << fields << "a second answer: " << out;
+    EXPECT_TRUE(c.ec) << fields << "still open";
+  }
+  // HTTP/1.0 has no chunked coding.
+  HttpClient old(ts.port());
+  auto out = old.raw("POST /x HTTP/1.0\r\nTransfer-Encoding: chunked\r\nContent-Type: application/json\r\n\r\n0\r\n\r\n");
+  EXPECT_EQ(out.rfind("HTTP/1.", 0), 0u) << out;
+  EXPECT_EQ(out.find(" 400 "), 8u) << out;
+  ts.on_io([] {});
+  EXPECT_EQ(handled, 0);
+  EXPECT_GE(ts.server().stats().refused_framing, 1u);
+
+  // Exactly "chunked", in any case and with spaces, is fine and the
+  // connection stays usable.
+  HttpClient c(ts.port());
+  out = c.raw(head + "Transfer-Encoding:  Chunked \r\n\r\n2\r\n{}\r\n0\r\n\r\n" + smuggled, 1s);
+  EXPECT_EQ(out.rfind("HTTP/1.1 200 ", 0), 0u) << out;
+  EXPECT_NE(out.find("HTTP/1.1 200 ", 1), std::string::npos) << "the pipelined request is answered too: " << out;
+  ts.on_io([] {});
+  EXPECT_EQ(handled, 2);
+}
+
+// --- browsers: Host and Origin ------------------------------------------------
+
+// What any web page the operator opens could send to the no-token loopback
+// gateway is refused; the dashboard's own requests, scripts and listed
+// origins are not.
+TEST(Browsers, CrossSiteWritesAreRefusedSameOriginAccepted) {
+  HttpConfig cfg = quick_config();
+  cfg.allowed_origins = {"https://scada.example"};
+  int handled = 0;
+  TestServer ts(cfg, [&](HttpServer& s) {
+    s.add_route("POST", "/api/v1/networks/{net}/nodes/{node}/nmt", [&](const Request& r, Responder done) {
+      ++handled;
+      echo(r, std::move(done));
+    });
+    s.add_route("GET", "/api/v1/gateway", echo);
+  });
+  const std::string nmt = "/api/v1/networks/1/nodes/0/nmt";
+  const std::string stop = R"({"command":"stop"})";
+  const std::string own = "http://127.0.0.1:" + std::to_string(ts.port());
+  const auto post = [&](std::vector<std::pair<std::string, std::string>> fields) {
+    HttpClient c(ts.port());
+    return c.request(bhttp::verb::post, nmt, stop, std::move(fields));
+  };
+  // A form or a text/plain fetch from another site (no CORS preflight).
+  auto res = post({{"Content-Type", "text/plain;charset=UTF-8"}, {"Origin", "https://evil.example"}});
+  EXPECT_EQ(res.result_int(), 403u) << res.body();
+  EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json");
+  EXPECT_FALSE(res.keep_alive());
+  // A JSON one too, with or without a token.
+  EXPECT_EQ(post({{"Content-Type", "application/json"}, {"Origin", "https://evil.example"}}).result_int(), 403u);
+  EXPECT_EQ(post({{"Content-Type", "application/json"},
+                  {"Origin", "https://evil.example"},
+                  {"Authorization", "Bearer t"}})
+                .result_int(),
+            403u);
+  // Another service on this machine, or the right host over another scheme, is another origin.
+  EXPECT_EQ(post({{"Content-Type", "application/json"}, {"Origin", "http://127.0.0.1:1"}}).result_int(), 403u);
+  EXPECT_EQ(post({{"Content-Type", "application/json"}, {"Origin", "https://127.0.0.1:" + std::to_string(ts.port())}})
+                .result_int(),
+            403u);
+  EXPECT_EQ(post({{"Content-Type", "application/json"}, {"Origin", "null"}}).result_int(), 403u);
+  // Browsers that send no Origin: a form or text body is not an API call.
+  EXPECT_EQ(post({{"Content-Type", "text/plain"}}).result_int(), 415u);
+  EXPECT_EQ(post({{"Content-Type", "application/x-www-form-urlencoded"}}).result_int(), 415u);
+  EXPECT_EQ(post({}).result_int(), 415u);
+  ts.on_io([] {});
+  EXPECT_EQ(handled, 0);
+
+  // The dashboard (same origin), a listed origin, a script (no Origin).
+  EXPECT_EQ(post({{"Content-Type", "application/json"}, {"Origin", own}}).result_int(), 200u);
+  EXPECT_EQ(post({{"Content-Type", "application/json"}, {"Origin", "https://scada.example"}}).result_int(), 200u);
+  EXPECT_EQ(post({{"Content-Type", "application/json"}}).result_int(), 200u);
+  // Reading with a foreign Origin changes nothing (and the browser keeps
+  // the answer from the page: no CORS headers).
+  HttpClient c(ts.port());
+  res = c.request(bhttp::verb::get, "/api/v1/gateway", {}, {{"Origin", "https://evil.example"}});
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res.count(bhttp::field::access_control_allow_origin), 0u);
+  ts.on_io([] {});
+  EXPECT_EQ(handled, 3);
+  const auto st = ts.server().stats();
+  EXPECT_EQ(st.refused_origin, 6u);
+  EXPECT_EQ(st.refused_media_type, 3u);
 }
 
 class StaticFiles : public ::testing::Test {
@@ -572,6 +813,47 @@ TEST_F(StaticFiles, ServesDashboardWithContentTypesAndRefusesTraversal) {
   res = c.request(bhttp::verb::post, "/");
   EXPECT_EQ(res.result_int(), 405u);
   EXPECT_EQ(res[bhttp::field::allow], "GET, HEAD");
+}
+
+// DNS rebinding: a page whose own name now resolves to this gateway sends
+// its name as Host. Refused on every path: files, API, event stream.
+TEST_F(StaticFiles, ForeignHostIsRefusedForFilesApiAndWebSocket) {
+  HttpConfig cfg = quick_config();
+  cfg.static_dir = base_ / "web";
+  cfg.host_names = {"gw.plant.example"};
+  TestServer ts(cfg, [](HttpServer& s) { s.add_route("GET", "/api/v1/networks/{net}/nodes/{node}/sdo/{i}/{s}", echo); });
+  const std::string port = std::to_string(ts.port());
+  const std::string sdo = "/api/v1/networks/1/nodes/5/sdo/1018/1";
+  for (const std::string& target : std::vector<std::string>{"/", "/static/app.js", sdo}) {
+    HttpClient c(ts.port());
+    auto res = c.request(bhttp::verb::get, target, {}, {{"Host", "rebind.attacker.example:" + port}});
+    EXPECT_EQ(res.result_int(), 421u) << target;
+    EXPECT_EQ(res[bhttp::field::content_type], "application/problem+json") << target;
+    EXPECT_EQ(res.body().find("<!doctype"), std::string::npos) << target;
+    EXPECT_FALSE(res.keep_alive()) << target;
+  }
+  WsClient ws(ts.port(), "/api/v1/events", std::nullopt, 0, "rebind.attacker.example:" + port);
+  EXPECT_TRUE(ws.ec);
+  EXPECT_EQ(ws.response.result_int(), 421u);
+  EXPECT_EQ(ts.server().stats().ws_clients, 0u);
+
+  // The gateway's own names.
+  for (const std::string& host : std::vector<std::string>{"127.0.0.1:" + port, "localhost:" + port, "LOCALHOST",
+                                                         "[::1]:" + port, "gw.plant.example"}) {
+    HttpClient c(ts.port());
+    EXPECT_EQ(c.request(bhttp::verb::get, sdo, {}, {{"Host", host}}).result_int(), 200u) << host;
+  }
+  // HTTP/1.1 without Host, or a malformed one: 400; HTTP/1.0 needs none.
+  HttpClient none(ts.port());
+  auto out = none.raw("GET / HTTP/1.1\r\n\r\n");
+  EXPECT_EQ(out.rfind("HTTP/1.1 400 ", 0), 0u) << out;
+  HttpClient bad(ts.port());
+  out = bad.raw("GET / HTTP/1.1\r\nHost: a b\r\n\r\n");
+  EXPECT_EQ(out.rfind("HTTP/1.1 400 ", 0), 0u) << out;
+  HttpClient old(ts.port());
+  out = old.raw("GET / HTTP/1.0\r\n\r\n");
+  EXPECT_EQ(out.rfind("HTTP/1.0 200 ", 0), 0u) << out;
+  EXPECT_EQ(ts.server().stats().refused_host, 6u);
 }
 
 // --- WebSocket ------------------------------------------------------------
@@ -656,7 +938,13 @@ TEST(WebSocket, OriginCheck) {
   EXPECT_FALSE(same.ec) << same.ec.message();
   WsClient none(ts.port());  // not a browser
   EXPECT_FALSE(none.ec);
-  EXPECT_EQ(ts.server().stats().responses_by_status[403], 1u);
+  // Cross-site WebSocket hijacking from another local service, or from the
+  // right host over another scheme.
+  WsClient other_port(ts.port(), "/api/v1/events", "http://127.0.0.1:1");
+  EXPECT_EQ(other_port.response.result_int(), 403u);
+  WsClient other_scheme(ts.port(), "/api/v1/events", "https://127.0.0.1:" + std::to_string(ts.port()));
+  EXPECT_EQ(other_scheme.response.result_int(), 403u);
+  EXPECT_EQ(ts.server().stats().responses_by_status[403], 3u);
 }
 
 TEST(WebSocket, StalledClientDoesNotHoldUpOthers) {
@@ -825,7 +1113,7 @@ TEST_F(Tls, HttpsAndWssWorkAndPlainHttpIsRefused) {
   {
     HttpClient plain(ts.port());
     ASSERT_FALSE(plain.ec);
-    auto out = plain.raw("GET /api/v1/gateway HTTP/1.1\r\nHost: a\r\n\r\n");
+    auto out = plain.raw("GET /api/v1/gateway HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n");
     EXPECT_EQ(out.find("HTTP/1.1 200"), std::string::npos) << out;
     EXPECT_EQ(out.find("/api/v1/gateway"), std::string::npos);
     EXPECT_TRUE(plain.ec);  // closed by the server

@@ -354,6 +354,38 @@ TEST(RenderMetrics, NoDuplicateSeriesAndOneBusStatePerNetwork) {
   EXPECT_EQ(bus_ones, 2);
 }
 
+TEST(RenderMetrics, HttpConnectionFamiliesWhenGiven) {
+  MetricsSnapshot s;
+  EXPECT_EQ(render_metrics(s).find("canopen_gateway_http_connections"), std::string::npos);
+  HttpConnectionMetrics h;
+  h.open = 40;
+  h.idle = 7;
+  h.refused_per_address = 12;
+  h.refused_full = 3;
+  h.evicted_idle = 5;
+  h.header_timeouts = 2;
+  h.refused_framing = 1;
+  h.refused_host = 4;
+  h.refused_origin = 6;
+  h.refused_media_type = 8;
+  s.http_connections = h;
+  const std::string text = render_metrics(s);
+  check_exposition(text);
+  for (const char* line : {"canopen_gateway_http_connections{state=\"open\"} 40\n",
+                           "canopen_gateway_http_connections{state=\"idle\"} 7\n",
+                           "canopen_gateway_http_connections_refused_total{reason=\"per-address\"} 12\n",
+                           "canopen_gateway_http_connections_refused_total{reason=\"full\"} 3\n",
+                           "canopen_gateway_http_connections_evicted_total 5\n",
+                           "canopen_gateway_http_header_timeouts_total 2\n",
+                           "canopen_gateway_http_requests_refused_total{reason=\"framing\"} 1\n",
+                           "canopen_gateway_http_requests_refused_total{reason=\"host\"} 4\n",
+                           "canopen_gateway_http_requests_refused_total{reason=\"origin\"} 6\n",
+                           "canopen_gateway_http_requests_refused_total{reason=\"media-type\"} 8\n",
+                           "# TYPE canopen_gateway_http_connections gauge\n",
+                           "# TYPE canopen_gateway_http_connections_refused_total counter\n"})
+    EXPECT_NE(text.find(line), std::string::npos) << line;
+}
+
 TEST(RenderMetrics, UnknownBusStateGivesAllZero) {
   MetricsSnapshot s;
   s.networks.push_back(NetworkMetrics{.network = 3, .interface = "can9", .bus_state = "weird"});

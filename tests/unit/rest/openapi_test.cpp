@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "auth.hpp"
+#include "request_checks.hpp"
 #include "rest_rig.hpp"
 
 namespace gateway {
@@ -198,6 +199,25 @@ TEST(OpenApi, EveryRefResolves) {
   const auto doc = document();
   std::string where;
   check_refs(doc, doc, where);
+}
+
+// What the server refuses before any route runs (request_checks.hpp) is
+// part of every operation's contract.
+TEST(OpenApi, BrowserRefusalsAreDocumented) {
+  const auto doc = document();
+  for (const auto& [path, item] : doc.at("paths").as_object()) {
+    for (const char* m : kMethods) {
+      const auto* op = item.as_object().if_contains(m);
+      if (op == nullptr) continue;
+      const auto& responses = op->at("responses").as_object();
+      SCOPED_TRACE(upper(m) + " " + std::string(path));
+      EXPECT_TRUE(responses.contains("421")) << "foreign Host";
+      if (http::is_state_changing(upper(m))) {
+        EXPECT_TRUE(responses.contains("403")) << "foreign Origin";
+        EXPECT_TRUE(responses.contains("415")) << "body neither JSON nor protobuf";
+      }
+    }
+  }
 }
 
 TEST(OpenApi, ServedAsJsonWithoutAToken) {

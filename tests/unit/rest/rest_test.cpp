@@ -212,6 +212,33 @@ TEST(Rest, NmtStopAndStartAll) {
   }));
 }
 
+// Issue 12: in the no-token loopback mode any web page the operator opened
+// could stop every node with a text/plain POST, and a DNS-rebinding page
+// could read SDO values. Both are refused; the dashboard's own requests are not.
+TEST(Rest, WebPagesCannotActOnTheLoopbackGateway) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.all_operational(); }));
+  const std::string nmt = "/api/v1/networks/1/nodes/0/nmt";
+  const std::string stop = R"({"command": "stop"})";
+  auto r = rig.request("POST", nmt, stop, {"Content-Type: text/plain;charset=UTF-8", "Origin: https://evil.example"});
+  EXPECT_EQ(r.status, 403) << r.body;
+  r = rig.request("POST", nmt, stop, {"Content-Type: text/plain"});  // a browser that sends no Origin
+  EXPECT_EQ(r.status, 415) << r.body;
+  r = rig.request("GET", kNode5 + "/sdo/1018/1", {}, {"Host: rebind.attacker.example:" + std::to_string(rig.port)});
+  EXPECT_EQ(r.status, 421) << r.body;
+  EXPECT_FALSE(r.json().is_object() && r.json().as_object().contains("value")) << r.body;
+  rig.io.run_for(100ms);
+  EXPECT_TRUE(rig.all_operational()) << "a refused NMT stop was sent";
+  const std::string own = "Origin: http://127.0.0.1:" + std::to_string(rig.port);
+  EXPECT_EQ(rig.request("POST", "/api/v1/networks/1/nodes/10/nmt", stop, {"Content-Type: application/json", own}).status,
+            200);
+  EXPECT_TRUE(rig.run_until([&] { return rig.app->cache().node(1, 10)->state == canopen::NmtState::Stopped; }));
+  auto m = rig.request("GET", "/metrics");
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_http_requests_refused_total{reason=\"origin\"} 1\n"));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_http_requests_refused_total{reason=\"media-type\"} 1\n"));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_http_requests_refused_total{reason=\"host\"} 1\n"));
+}
+
 TEST(Rest, ObjectDictionaryFromTheEds) {
   RestRig rig;
   auto od = rig.request("GET", kNode5 + "/od");

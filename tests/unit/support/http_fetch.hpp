@@ -29,7 +29,8 @@ struct HttpReply {
   }
 };
 
-// Sends `method target` with `headers` ("Name: value") and `body`; reads
+// Sends `method target` with `headers` ("Name: value"; Host defaults to
+// 127.0.0.1:<port>) and `body`; reads
 // until the server closes (or, for a 101, until the end of the header).
 inline HttpReply fetch(std::uint16_t port, const std::string& method, const std::string& target,
                        const std::string& body, const std::vector<std::string>& headers) {
@@ -37,12 +38,14 @@ inline HttpReply fetch(std::uint16_t port, const std::string& method, const std:
   asio::io_context io;
   asio::ip::tcp::socket s(io);
   s.connect({asio::ip::make_address("127.0.0.1"), port});
-  std::string req = method + " " + target + " HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(port) + "\r\n";
-  bool upgrade = false;
+  std::string req = method + " " + target + " HTTP/1.1\r\n";
+  bool upgrade = false, host = false;
   for (const auto& h : headers) {
     req += h + "\r\n";
     upgrade = upgrade || h.rfind("Upgrade:", 0) == 0;
+    host = host || h.rfind("Host:", 0) == 0;
   }
+  if (!host) req += "Host: 127.0.0.1:" + std::to_string(port) + "\r\n";
   if (!upgrade) req += "Connection: close\r\n";
   if (!body.empty() || method == "PUT" || method == "POST")
     req += "Content-Length: " + std::to_string(body.size()) + "\r\n";
