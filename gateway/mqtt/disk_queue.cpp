@@ -538,7 +538,6 @@ void DiskQueue::delete_segment(std::map<std::uint64_t, Segment>::iterator it) {
 bool DiskQueue::free_space() {
   const auto before = segments_.size();
   delete_consumed_segments(true);
-  if (segments_.empty()) append_failed_ = false;  // nothing left to write: the next push tries
   return segments_.size() < before;
 }
 
@@ -547,6 +546,9 @@ void DiskQueue::failed(int err) {
   if (!storage_error_) storage_error_ = std::error_code(err != 0 ? err : EIO, std::generic_category());
 }
 
+// Cleared only after records were written again (append_failed_ false), so
+// a disk that is still full does not end its episode just because nothing
+// was pending for a moment.
 void DiskQueue::update_error_state() {
   if (storage_error_ && !append_failed_ && !flush_pending() && !head_unwritten_) storage_error_.clear();
 }
