@@ -329,7 +329,9 @@ void DiskQueue::replay_segment(std::uint64_t first, Segment& seg, bool last, std
   if (entries_.empty() && head_ < next_seq_) head_ = next_seq_;
 }
 
-DiskQueue::Segment* DiskQueue::writable_segment(std::uint64_t seq, std::uint64_t need) {
+// The segment the next record (seq next_seq_) goes to; nullptr when it
+// cannot be created.
+DiskQueue::Segment* DiskQueue::writable_segment(std::uint64_t need) {
   if (!segments_.empty()) {
     auto& last = segments_.rbegin()->second;
     if (last.size == 0 || last.size + need <= opts_.segment_bytes) return &last;
@@ -337,14 +339,22 @@ DiskQueue::Segment* DiskQueue::writable_segment(std::uint64_t seq, std::uint64_t
   }
   // A fully acked last segment goes before new space is taken.
   delete_consumed_segments(true);
-  const auto path = opts_.dir / segment_name(seq);
+  auto path = opts_.dir / segment_name(next_seq_);
   int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0 && errno == EISDIR) {
+    // A stray directory has the name (ignored at open): skip that number.
+    entries_.push_back(Entry{next_seq_, 0, 0, 0, State::Dropped, false});
+    ++next_seq_;
+    advance_head();
+    path = opts_.dir / segment_name(next_seq_);
+    fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  }
   if (fd < 0) {
     failed(errno);
     append_failed_ = true;
     return nullptr;
   }
-  Segment& seg = segments_[seq];
+  Segment& seg = segments_[next_seq_];
   seg.fd = fd;
   tail_.clear();
   tail_base_ = 0;
@@ -372,15 +382,14 @@ std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, 
   }
   enforce_bounds(size);
 
-  const std::uint64_t seq = next_seq_;
-  Segment* seg = writable_segment(seq, size);
-  if (seg == nullptr && free_space()) seg = writable_segment(seq, size);
+  Segment* seg = writable_segment(size);
+  if (seg == nullptr && free_space()) seg = writable_segment(size);
   if (seg == nullptr) return refuse();
   if (opts_.buffered_writes && seg->size - seg->written + size > opts_.write_buffer_bytes) {
     // The buffer is full: write it out. Not while appends fail (flush()
     // retries), so a full disk costs no write() per message.
     if (append_failed_ || !flush_segment(*seg)) {
-      if (free_space() && (seg = writable_segment(seq, size)) == nullptr) return refuse();
+      if (free_space() && (seg = writable_segment(size)) == nullptr) return refuse();
       if (seg->size - seg->written + size > opts_.write_buffer_bytes) return refuse();
     }
   }
@@ -392,6 +401,7 @@ std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, 
     tail_.clear();
     tail_base_ = seg->size;
   }
+  const std::uint64_t seq = next_seq_;
   const std::size_t at = tail_.size();
   tail_.resize(at + size);
   char* p = tail_.data() + at;

@@ -231,7 +231,7 @@ class DiskQueue {
   bool persist_head();
   bool flush_segment(Segment& seg);
   const char* record(const Entry& e);
-  Segment* writable_segment(std::uint64_t seq, std::uint64_t need);
+  Segment* writable_segment(std::uint64_t need);
   void drop(std::uint64_t seq, std::uint64_t& reason);
   void enforce_bounds(std::uint64_t incoming_bytes);
   void advance_head();

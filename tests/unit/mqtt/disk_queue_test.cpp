@@ -573,6 +573,18 @@ TEST(DiskQueue, StrayNamesAreIgnoredWithAWarning) {
   EXPECT_EQ(drain_all(q), (std::vector<std::string>{"payload-0", "payload-1", "payload-2", "payload-3", "payload-4"}));
   q.push(msg(5));  // and it keeps working
   EXPECT_TRUE(fs::exists(d.path() / "foo"));  // not its to delete
+
+  // A directory holding the very name the next segment needs: that number
+  // is skipped, nothing is refused.
+  TempDir d2;
+  fs::create_directories(d2.path() / "00000000000000000001.seg");
+  {
+    DiskQueue q2(opts(d2.path()));
+    EXPECT_NE(q2.push(msg(0)), 0u);
+    EXPECT_FALSE(q2.storage_error());
+  }
+  DiskQueue q2(opts(d2.path()));
+  EXPECT_EQ(drain_all(q2), (std::vector<std::string>{"payload-0"}));
 }
 
 // ---- Syncing (issue 12, item 1) --------------------------------------------
