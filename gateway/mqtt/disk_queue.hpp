@@ -80,9 +80,11 @@
 //    prefix; the position only ever needs to be <= the first record still
 //    in the files), and once every message is acked or dropped the last
 //    segment and the unwritten buffer go too.
-//  - flush() and sync() retry (push() does not, so a full disk costs no
-//    write() per message); storage_error() clears once everything pending
-//    has been written.
+//  - flush() and sync() retry (a buffered push() does not, so a full disk
+//    costs no write() per message); storage_error() clears once records
+//    were written again and nothing is pending.
+//  - a directory (ignored at open) holding the name a new segment needs
+//    makes the queue skip that sequence number.
 // Segment creation, appends, the position write and truncation may all fail
 // this way; a failed truncation is ignored (appends are positional, so a
 // stale tail is overwritten or skipped on the next replay).
