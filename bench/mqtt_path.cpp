@@ -61,6 +61,9 @@ int main(int argc, char** argv) {
   mc.gateway_id = "bench";
   mc.queue.dir = queue_dir;
   mc.qos.fill(static_cast<std::uint8_t>(qos));
+  // As the gateway's default storage for that QoS: QoS 0 in memory while
+  // connected (`outage`), QoS 1 through the disk queue.
+  mc.storage.fill(qos == 0 ? gateway::mqtt::StorageMode::Outage : gateway::mqtt::StorageMode::Disk);
   mc.accept_requests = false;
   gateway::mqtt::MqttPublisher publisher(io, mc, log);
 

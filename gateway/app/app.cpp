@@ -475,6 +475,22 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
   out.queue_bytes = c.queue_bytes;
   out.reconnects = c.reconnects;
   out.requests_refused = c.replies_refused;
+  out.stalls = c.stalls;
+  out.storage_failing = c.storage_failing;
+  const auto& q = mqtt_->publisher->queue_counters();
+  const auto& t = mqtt_->publisher->tier_counters();
+  out.memory_depth = t.memory_depth;
+  out.spilled = t.spilled + t.to_disk;
+  out.storage_bytes = q.storage_bytes;
+  out.storage_syncs = q.syncs;
+  out.storage_errors = q.write_errors;
+  out.corrupt_records = q.corrupt_records;
+  out.corrupt_bytes = q.corrupt_bytes + q.truncated_bytes;
+  out.dropped_by_reason = {{"queue_full", q.dropped_qos0 + q.dropped_qos1 + q.dropped_span},
+                           {"too_big", q.dropped_too_big},
+                           {"storage_full", q.dropped_full + t.dropped_spill},
+                           {"memory_full", t.dropped_memory},
+                           {"rejected", c.rejected}};
   return out;
 }
 
@@ -528,12 +544,19 @@ void App::start_mqtt() {
   mc.key_file = config_.mqtt.key_file;
   mc.gateway_id = config_.gateway_id;
   mc.format = config_.mqtt.format == PayloadFormat::Protobuf ? mqtt::PayloadFormat::Protobuf : mqtt::PayloadFormat::Json;
-  for (std::size_t k = 0; k < mc.qos.size(); ++k)
+  for (std::size_t k = 0; k < mc.qos.size(); ++k) {
     mc.qos[k] = static_cast<std::uint8_t>(config_.mqtt.qos_for(static_cast<EventKind>(k)));
+    const auto mode = config_.mqtt.storage_for(static_cast<EventKind>(k));
+    mc.storage[k] = mode == StorageMode::Disk     ? mqtt::StorageMode::Disk
+                    : mode == StorageMode::Outage ? mqtt::StorageMode::Outage
+                                                  : mqtt::StorageMode::Memory;
+  }
   mc.queue.dir = config_.mqtt.queue_dir;
   mc.queue.max_bytes = config_.mqtt.queue_max_bytes;
   mc.queue.max_messages = config_.mqtt.queue_max_messages;
   mc.reply_topics = config_.mqtt.reply_topics;
+  mc.memory_max_bytes = config_.mqtt.memory_max_bytes;
+  mc.memory_max_messages = config_.mqtt.memory_max_messages;
   // The Will is fixed at start: it carries the start time and uptime 0
   // (the broker publishes it when it notices the loss; only a clean stop
   // knows when it went offline).

@@ -131,6 +131,17 @@ class App {
     bool connected = false;
     std::uint64_t published = 0, acked = 0, dropped = 0, queue_depth = 0, queue_bytes = 0, reconnects = 0;
     std::uint64_t requests_refused = 0;  // dropped unanswered for their reply address
+    // Storage (mqtt/outbound_queue.hpp, disk_queue.hpp).
+    std::uint64_t memory_depth = 0;      // messages waiting in memory
+    std::uint64_t spilled = 0;           // `outage` messages written to disk (broker away, memory full)
+    std::uint64_t storage_bytes = 0;     // bytes the queue wrote to its files
+    std::uint64_t storage_syncs = 0;     // its fdatasync calls
+    std::uint64_t storage_errors = 0;    // failed writes
+    bool storage_failing = false;        // writes failing now (disk full)
+    std::uint64_t corrupt_records = 0;   // skipped as corrupt at start
+    std::uint64_t corrupt_bytes = 0;
+    std::uint64_t stalls = 0;            // delivery restarts by the stall detector
+    std::map<std::string, std::uint64_t> dropped_by_reason;  // "storage_full" -> n
   };
   std::optional<MqttCounters> mqtt_counters() const;
   // Process data to `node`'s RPDO `number` (COB-ID and mapping from its

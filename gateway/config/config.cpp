@@ -290,10 +290,14 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   }
   if (auto v = a.get("heartbeat-min-interval-ms")) m.heartbeat_min_interval = ms(*v, 3'600'000);
   if (auto q = a.get("queue")) {
-    q->expect_map({"dir", "max-bytes", "max-messages"});
+    q->expect_map({"dir", "max-bytes", "max-messages", "memory-max-bytes", "memory-max-messages", "storage"});
     if (auto v = q->get("dir")) m.queue_dir = resolve(dir, v->str());
     if (auto v = q->get("max-bytes")) m.queue_max_bytes = v->integer(1 << 16, 1ULL << 40);
     if (auto v = q->get("max-messages")) m.queue_max_messages = v->integer(16, 1ULL << 32);
+    if (auto v = q->get("memory-max-bytes")) m.memory_max_bytes = v->integer(1 << 16, 1ULL << 36);
+    if (auto v = q->get("memory-max-messages")) m.memory_max_messages = v->integer(16, 1ULL << 32);
+    if (auto s = q->get("storage"); s && !s->is_map())
+      s->fail("expected kind: mode pairs, e.g. tpdo: outage");  // read in parse_config
   }
 }
 
@@ -366,6 +370,11 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
 
 }  // namespace
 
+StorageMode MqttConfig::storage_for(EventKind k) const {
+  if (auto it = storage.find(k); it != storage.end()) return it->second;
+  return qos_for(k) == 0 ? StorageMode::Outage : StorageMode::Disk;
+}
+
 int MqttConfig::qos_for(EventKind k) const {
   if (auto it = qos.find(k); it != qos.end()) return it->second;
   switch (k) {
@@ -437,22 +446,35 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   if (auto m = top.get("mqtt")) {
     parse_mqtt(*m, c.mqtt, dir);
     if (auto q = m->get("queue"); q && q->get("dir")) c.queue_dir_origin = q->get("dir")->where();
-    // QoS per kind needs the file name for errors, so it is read here.
-    if (auto q = m->get("qos")) {
-      for (const auto& kv : q->node()) {
+    // Per-kind maps need the file name for errors, so they are read here.
+    // `default` first sets every kind, whatever its place in the map.
+    auto per_kind = [&](const At& map, const auto& set) {
+      for (const auto& kv : map.node()) {
         const auto key = kv.first.as<std::string>();
-        At value(kv.second, q->path() + "." + key, file);
-        EventKind kind{};
-        if (key == "default") {
-          const int level = static_cast<int>(value.integer(0, 2));
-          for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k) c.mqtt.qos[static_cast<EventKind>(k)] = level;
-          continue;
-        }
-        if (!event_kind_from_string(key, kind))
-          At(kv.first, q->path() + "." + key, file)
-              .fail("unknown event kind (status, bus, state, heartbeat, emcy, tpdo, pdo, sync, time, boot, default)");
-        c.mqtt.qos[kind] = static_cast<int>(value.integer(0, 2));
+        if (key != "default") continue;
+        for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k)
+          set(static_cast<EventKind>(k), At(kv.second, map.path() + "." + key, file));
       }
+      for (const auto& kv : map.node()) {
+        const auto key = kv.first.as<std::string>();
+        if (key == "default") continue;
+        EventKind kind{};
+        if (!event_kind_from_string(key, kind))
+          At(kv.first, map.path() + "." + key, file)
+              .fail("unknown event kind (status, bus, state, heartbeat, emcy, tpdo, pdo, sync, time, boot, default)");
+        set(kind, At(kv.second, map.path() + "." + key, file));
+      }
+    };
+    if (auto q = m->get("qos"))
+      per_kind(*q, [&](EventKind k, const At& v) { c.mqtt.qos[k] = static_cast<int>(v.integer(0, 2)); });
+    if (auto s = m->get("queue") ? m->get("queue")->get("storage") : std::nullopt) {
+      per_kind(*s, [&](EventKind k, const At& v) {
+        const auto mode = v.str();
+        if (mode == "disk") c.mqtt.storage[k] = StorageMode::Disk;
+        else if (mode == "outage") c.mqtt.storage[k] = StorageMode::Outage;
+        else if (mode == "memory") c.mqtt.storage[k] = StorageMode::Memory;
+        else v.fail("'" + mode + "' is not disk, outage or memory");
+      });
     }
   }
   if (auto h = top.get("http")) parse_http(*h, c.http, dir);

@@ -94,6 +94,11 @@ struct NetworkConfig {
 
 enum class PayloadFormat : std::uint8_t { Json, Protobuf };
 
+// Where an event kind's MQTT messages wait (mqtt/outbound_queue.hpp): disk
+// (written and synced), outage (memory while the broker is connected, disk
+// while it is not), memory (never on storage).
+enum class StorageMode : std::uint8_t { Disk, Outage, Memory };
+
 struct MqttConfig {
   bool enabled = false;
   std::string uri;  // tcp://host:1883, ssl://host:8883, ...
@@ -108,6 +113,9 @@ struct MqttConfig {
   std::string queue_dir;              // disk buffer ("" = <state dir>/mqtt-queue)
   std::uint64_t queue_max_bytes = 256ULL << 20;
   std::uint64_t queue_max_messages = 1'000'000;
+  std::uint64_t memory_max_bytes = 16ULL << 20;  // the memory tier (outage and memory kinds)
+  std::uint64_t memory_max_messages = 100'000;
+  std::map<EventKind, StorageMode> storage;  // per kind; default: outage for QoS 0 kinds, disk for the others
   // Role of an MQTT request that carries no token (anyone who may publish
   // to the request topics on the broker). nullopt (not set): None, a token
   // is required, also without http.tokens; --demo without tokens sets
@@ -118,6 +126,7 @@ struct MqttConfig {
   // reply_topic_refusal). Empty: the default. Each is a valid filter.
   std::vector<std::string> reply_topics;
   int qos_for(EventKind k) const;
+  StorageMode storage_for(EventKind k) const;
 };
 
 struct TokenConfig {

@@ -264,6 +264,34 @@ std::string render_metrics(const MetricsSnapshot& s) {
              "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
              "correlation data over 1 KiB.",
              C, s.mqtt_requests_refused);
+    const std::string mqtt_dropped = "canopen_gateway_mqtt_dropped_total";
+    w.family(mqtt_dropped,
+             "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
+             "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
+             C);
+    for (const auto& [reason, n] : s.mqtt_dropped_by_reason) w.sample(mqtt_dropped, {{"reason", reason}}, n);
+    w.single("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
+             G, s.mqtt_memory_depth);
+    w.single("canopen_gateway_mqtt_spilled_total",
+             "MQTT messages of outage kinds written to disk because the broker was away or memory full.", C,
+             s.mqtt_spilled);
+    w.single("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", C,
+             s.mqtt_storage_bytes);
+    w.single("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", C,
+             s.mqtt_storage_syncs);
+    w.single("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
+             C, s.mqtt_storage_errors);
+    w.single("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", G,
+             s.mqtt_storage_failing);
+    w.single("canopen_gateway_mqtt_queue_corrupt_records_total",
+             "MQTT queue records lost to corruption, found when the queue was opened.", C, s.mqtt_corrupt_records);
+    w.single("canopen_gateway_mqtt_queue_corrupt_bytes_total",
+             "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", C,
+             s.mqtt_corrupt_bytes);
+    w.single("canopen_gateway_mqtt_stalls_total",
+             "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
+             "flight).",
+             C, s.mqtt_stalls);
   }
 
   // WebSocket and HTTP.

@@ -138,6 +138,14 @@ struct MetricsSnapshot {
   std::uint64_t mqtt_queue_depth = 0, mqtt_queue_bytes = 0;
   std::uint64_t mqtt_reconnects = 0;
   std::uint64_t mqtt_requests_refused = 0;  // dropped unanswered for their reply address
+  // The MQTT queue's storage (mqtt/outbound_queue.hpp, disk_queue.hpp).
+  std::map<std::string, std::uint64_t> mqtt_dropped_by_reason;  // "storage_full" -> n
+  std::uint64_t mqtt_memory_depth = 0;
+  std::uint64_t mqtt_spilled = 0;
+  std::uint64_t mqtt_storage_bytes = 0, mqtt_storage_syncs = 0, mqtt_storage_errors = 0;
+  bool mqtt_storage_failing = false;
+  std::uint64_t mqtt_corrupt_records = 0, mqtt_corrupt_bytes = 0;
+  std::uint64_t mqtt_stalls = 0;
   std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
   std::map<int, std::uint64_t> http_responses_by_status;  // 200 -> n
   std::optional<HttpConnectionMetrics> http_connections;   // nullopt = no such families

@@ -1,11 +1,12 @@
 #include "mqtt/disk_queue.hpp"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
-
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstdio>
 #include <cstring>
 #include <system_error>
@@ -88,6 +89,14 @@ std::string segment_name(std::uint64_t first) {
   return buf;
 }
 
+// "<20 digits>.seg" naming a value that fits in 64 bits.
+bool parse_segment_name(const std::string& name, std::uint64_t& first) {
+  if (name.size() != 24 || name.compare(20, 4, ".seg") != 0) return false;
+  if (!std::all_of(name.begin(), name.begin() + 20, [](char c) { return c >= '0' && c <= '9'; })) return false;
+  auto [p, ec] = std::from_chars(name.data(), name.data() + 20, first);
+  return ec == std::errc() && p == name.data() + 20;
+}
+
 }  // namespace
 
 DiskQueue::DiskQueue(DiskQueueOptions opts) : opts_(std::move(opts)) {
@@ -96,8 +105,14 @@ DiskQueue::DiskQueue(DiskQueueOptions opts) : opts_(std::move(opts)) {
   std::error_code ec;
   std::filesystem::create_directories(opts_.dir, ec);
   if (ec) throw std::system_error(ec, "create " + opts_.dir.string());
-  head_fd_ = ::open((opts_.dir / "acked").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (head_fd_ < 0) throw_errno("open " + (opts_.dir / "acked").string());
+  const auto acked = opts_.dir / "acked";
+  head_fd_ = ::open(acked.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (head_fd_ < 0) {
+    // A full disk must not stop the gateway: the position is written once
+    // there is room again (persist_head opens it then).
+    if (errno != ENOSPC && errno != EDQUOT) throw_errno("open " + acked.string());
+    failed(errno);
+  }
   read_head();
   open_existing();
 }
@@ -109,6 +124,7 @@ DiskQueue::~DiskQueue() {
 }
 
 void DiskQueue::read_head() {
+  if (head_fd_ < 0) return;
   char buf[2 * kSlot];
   std::memset(buf, 0, sizeof buf);
   (void)pread_all(head_fd_, buf, sizeof buf, 0);  // short file: slots stay zero
@@ -123,104 +139,187 @@ void DiskQueue::read_head() {
     }
   }
   next_seq_ = cursor_ = head_;
+  // Both slots allocated now, so that rewriting them later needs no new
+  // space (a full disk then cannot fail the position write on most file
+  // systems). Best effort: persist_head() copes.
+  struct stat st {};
+  if (::fstat(head_fd_, &st) == 0 && st.st_size < static_cast<off_t>(2 * kSlot)) {
+    const auto have = static_cast<std::size_t>(st.st_size);
+    (void)pwrite_all(head_fd_, buf + have, 2 * kSlot - have, have);
+  }
 }
 
 void DiskQueue::write_head() {
   if (opts_.buffered_writes) {
-    head_unwritten_ = true;  // flush() writes it
+    head_unwritten_ = true;  // flush(true) or sync() writes it
     return;
   }
-  persist_head();
+  (void)persist_head();
 }
 
-void DiskQueue::persist_head() {
-  head_unwritten_ = false;
-  // Alternate slots so a torn write leaves the other, older slot valid.
-  ++head_generation_;
+bool DiskQueue::persist_head() {
+  head_unwritten_ = true;
+  if (head_fd_ < 0) {
+    head_fd_ = ::open((opts_.dir / "acked").c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (head_fd_ < 0) {
+      failed(errno);
+      return false;
+    }
+  }
+  // Alternate slots so a torn write leaves the other, older slot valid; a
+  // failed write is retried in the same slot (the other one stays valid).
+  const std::uint64_t gen = head_generation_ + 1;
   char s[kSlot] = {};
-  put_le(s, head_generation_, 8);
+  put_le(s, gen, 8);
   put_le(s + 8, head_, 8);
   put_le(s + 16, crc32(s, 16), 4);
-  if (!pwrite_all(head_fd_, s, kSlot, (head_generation_ % 2) * kSlot)) throw_errno("write acked position");
-  head_dirty_ = true;
+  if (!pwrite_all(head_fd_, s, kSlot, (gen % 2) * kSlot)) {
+    failed(errno);
+    return false;
+  }
+  head_generation_ = gen;
+  head_unwritten_ = false;
+  counters_.storage_bytes += kSlot;
+  return true;
 }
 
 void DiskQueue::open_existing() {
   std::vector<std::uint64_t> firsts;
   for (const auto& de : std::filesystem::directory_iterator(opts_.dir)) {
     const auto name = de.path().filename().string();
-    if (name.size() != 24 || name.substr(20) != ".seg") continue;
-    if (!std::all_of(name.begin(), name.begin() + 20, [](char c) { return c >= '0' && c <= '9'; })) continue;
-    firsts.push_back(std::stoull(name.substr(0, 20)));
+    if (name == "acked") continue;
+    std::uint64_t first = 0;
+    std::error_code ec;
+    if (parse_segment_name(name, first) && de.is_regular_file(ec)) {
+      firsts.push_back(first);
+      continue;
+    }
+    ++counters_.ignored_files;
+    warnings_.push_back("ignoring unknown " + std::string(de.is_directory(ec) ? "directory" : "file") + " '" + name +
+                        "' in " + opts_.dir.string());
   }
   std::sort(firsts.begin(), firsts.end());
   for (std::size_t i = 0; i < firsts.size(); ++i) {
     const auto path = opts_.dir / segment_name(firsts[i]);
+    const bool last = i + 1 == firsts.size();
     // Fully acked segments (the next one starts at or before the head) go.
-    if (i + 1 < firsts.size() && firsts[i + 1] <= head_) {
+    if (!last && firsts[i + 1] <= head_) {
       ::unlink(path.c_str());
       continue;
     }
     int fd = ::open(path.c_str(), O_RDWR | O_CLOEXEC);
-    if (fd < 0) throw_errno("open " + path.string());
+    if (fd < 0) {
+      ++counters_.ignored_files;
+      warnings_.push_back("cannot open " + path.string() + ": " + std::strerror(errno) + "; its messages are lost");
+      continue;
+    }
     Segment& seg = segments_[firsts[i]];
     seg.fd = fd;
-    replay_segment(firsts[i], seg, i + 1 == firsts.size());
+    replay_segment(firsts[i], seg, last, last ? ~std::uint64_t{0} : firsts[i + 1]);
   }
   cursor_ = head_;
   enforce_bounds(0);
 }
 
-void DiskQueue::replay_segment(std::uint64_t first, Segment& seg, bool /*last*/) {
+// Replays one segment's records (see "Replay" in the header). Records of
+// this segment have sequence numbers in [first, limit), increasing.
+void DiskQueue::replay_segment(std::uint64_t first, Segment& seg, bool last, std::uint64_t limit) {
+  const auto name = (opts_.dir / segment_name(first)).string();
   off_t end = ::lseek(seg.fd, 0, SEEK_END);
-  if (end < 0) throw_errno("seek segment");
-  const auto file_size = static_cast<std::uint64_t>(end);
+  const auto file_size = static_cast<std::uint64_t>(std::max<off_t>(end, 0));
   std::vector<char> data(file_size);
-  if (file_size > 0 && !pread_all(seg.fd, data.data(), data.size(), 0)) throw_errno("read segment");
-  std::uint64_t off = 0;
-  std::uint64_t expect = std::max(first, head_);
-  while (off + kHeader <= file_size) {
-    const char* h = data.data() + off;
-    auto len = static_cast<std::uint32_t>(get_le(h, 4));
-    if (len < kBodyFixed || len > kMaxBody || off + kHeader + len > file_size) break;
+  if (file_size > 0 && !pread_all(seg.fd, data.data(), data.size(), 0)) {
+    // Unreadable: its messages are lost; appends (if last) go after it.
+    counters_.corrupt_bytes += file_size;
+    warnings_.push_back("cannot read " + name + ": " + std::strerror(errno) + "; its messages are lost");
+    data.clear();
+  }
+  const std::uint64_t have = data.size();
+
+  // Seqs before this segment's first that are missing are in deleted (fully
+  // acked) segments: not corruption.
+  auto fill_to = [&](std::uint64_t s, bool corrupt) {
+    while (next_seq_ < s) {
+      if (next_seq_ >= head_) {
+        entries_.push_back(Entry{first, 0, 0, 0, State::Dropped, false});
+        if (corrupt) ++counters_.corrupt_records;
+      }
+      ++next_seq_;
+    }
+  };
+  fill_to(first, false);
+
+  std::uint64_t prev = 0;  // last good seq in this segment
+  // The size of a valid record at `at`, or 0. slack > 0 (resynchronising):
+  // its seq must also be within `slack` of the expected one, as the skipped
+  // bytes cannot have held more records than that.
+  auto record_at = [&](std::uint64_t at, std::uint64_t slack) -> std::uint64_t {
+    if (at + kHeader + kBodyFixed > have) return 0;
+    const char* h = data.data() + at;
+    const auto len = static_cast<std::uint32_t>(get_le(h, 4));
+    if (len < kBodyFixed || len > kMaxBody || at + kHeader + len > have) return 0;
     const char* b = h + kHeader;
-    if (static_cast<std::uint32_t>(get_le(h + 4, 4)) != crc32(b, len)) break;
-    std::uint64_t seq = get_le(b, 8);
-    auto tlen = get_le(b + 10, 2);
-    if (kBodyFixed + tlen > len) break;
-    const auto size = static_cast<std::uint32_t>(kHeader + len);
-    if (seq >= expect) {
-      // A gap (a lost segment) is filled with dropped entries.
-      while (next_seq_ < seq) {
-        if (next_seq_ >= head_) entries_.push_back(Entry{first, 0, 0, 0, State::Dropped});
-        ++next_seq_;
-      }
-      if (next_seq_ == seq) {
-        std::uint8_t qos = static_cast<std::uint8_t>(b[8]) == 0 ? 0 : 1;
-        entries_.push_back(Entry{first, off, size, qos, State::Live});
-        (qos == 0 ? live_qos0_ : live_qos1_).push_back(seq);
-        ++live_;
-        live_bytes_ += size;
-        ++counters_.replayed;
-        ++next_seq_;
-        expect = next_seq_;
-      }
+    const std::uint64_t seq = get_le(b, 8);
+    const std::uint64_t expected = prev != 0 ? prev + 1 : first;
+    if (seq < expected || seq >= limit || (slack > 0 && seq - expected >= slack)) return 0;
+    if (kBodyFixed + get_le(b + 10, 2) > len) return 0;
+    if (static_cast<std::uint32_t>(get_le(h + 4, 4)) != crc32(b, len)) return 0;
+    return kHeader + len;
+  };
+
+  std::uint64_t off = 0;
+  std::uint64_t bad_at = 0, bad_bytes = 0;
+  while (off < have) {
+    std::uint64_t size = record_at(off, 0);
+    if (size == 0) {
+      // Corrupt (or a torn tail): look for the next record that validates.
+      std::uint64_t at = off + 1;
+      for (; at + kHeader + kBodyFixed <= have; ++at)
+        if ((size = record_at(at, (at - off) / (kHeader + kBodyFixed) + 2)) != 0) break;
+      if (size == 0) break;  // nothing valid after off: the tail
+      counters_.corrupt_bytes += at - off;
+      bad_at = off;
+      bad_bytes = at - off;
+      off = at;
+    }
+    const char* b = data.data() + off + kHeader;
+    const std::uint64_t seq = get_le(b, 8);
+    prev = seq;
+    const std::uint64_t lost_before = counters_.corrupt_records;
+    if (seq >= next_seq_) fill_to(seq, true);  // the seqs skipped over are lost
+    if (bad_bytes > 0) {
+      warnings_.push_back(name + ": skipped " + std::to_string(bad_bytes) + " corrupt bytes at offset " +
+                          std::to_string(bad_at) + " (" + std::to_string(counters_.corrupt_records - lost_before) +
+                          " messages lost)");
+      bad_bytes = 0;
+    }
+    if (seq >= next_seq_) {
+      const std::uint8_t qos = static_cast<std::uint8_t>(b[8]) == 0 ? 0 : 1;
+      entries_.push_back(Entry{first, off, static_cast<std::uint32_t>(size), qos, State::Live, true});
+      (qos == 0 ? live_qos0_ : live_qos1_).push_back(seq);
+      ++live_;
+      live_bytes_ += size;
+      ++counters_.replayed;
+      ++next_seq_;
     }
     off += size;
   }
-  if (off < file_size) {
-    // Torn or corrupt tail: cut it so appends continue from a clean record.
-    counters_.truncated_bytes += file_size - off;
-    if (::ftruncate(seg.fd, static_cast<off_t>(off)) != 0) throw_errno("truncate segment");
+  if (off < have) {
+    if (last) {
+      // Torn write of a crash: cut it so appends continue from a clean
+      // record (a failed cut is harmless: appends overwrite it).
+      counters_.truncated_bytes += have - off;
+      (void)::ftruncate(seg.fd, static_cast<off_t>(off));
+    } else {
+      counters_.corrupt_bytes += have - off;
+      warnings_.push_back(name + ": skipped " + std::to_string(have - off) + " corrupt bytes at its end");
+    }
   }
-  seg.size = seg.written = off;
-  counters_.disk_bytes += off;
-  tail_.clear();
-  tail_base_ = off;  // appends to the last replayed segment go after this
-  // An empty segment still numbers from its name.
-  while (next_seq_ < first) {
-    entries_.push_back(Entry{first, 0, 0, 0, State::Dropped});
-    ++next_seq_;
+  seg.size = seg.written = last && have == file_size ? off : file_size;
+  counters_.disk_bytes += seg.size;
+  if (last) {
+    tail_.clear();
+    tail_base_ = seg.size;  // appends to the last segment go after this
   }
   // Keep the head consistent when the file started past it (earlier lost).
   while (!entries_.empty() && entries_.front().state != State::Live) {
@@ -230,26 +329,50 @@ void DiskQueue::replay_segment(std::uint64_t first, Segment& seg, bool /*last*/)
   if (entries_.empty() && head_ < next_seq_) head_ = next_seq_;
 }
 
-DiskQueue::Segment& DiskQueue::writable_segment(std::uint64_t seq, std::uint64_t need) {
+// The segment the next record (seq next_seq_) goes to; nullptr when it
+// cannot be created.
+DiskQueue::Segment* DiskQueue::writable_segment(std::uint64_t need) {
   if (!segments_.empty()) {
     auto& last = segments_.rbegin()->second;
-    if (last.size == 0 || last.size + need <= opts_.segment_bytes) return last;
+    if (last.size == 0 || last.size + need <= opts_.segment_bytes) return &last;
+    if (!flush_segment(last)) return nullptr;  // its buffer goes first
   }
-  if (!segments_.empty()) flush_segment(segments_.rbegin()->second);  // its buffer goes first
-  const auto path = opts_.dir / segment_name(seq);
+  // A fully acked last segment goes before new space is taken.
+  delete_consumed_segments(true);
+  auto path = opts_.dir / segment_name(next_seq_);
   int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw_errno("create " + path.string());
-  Segment& seg = segments_[seq];
+  if (fd < 0 && errno == EISDIR) {
+    // A stray directory has the name (ignored at open): skip that number.
+    entries_.push_back(Entry{next_seq_, 0, 0, 0, State::Dropped, false});
+    ++next_seq_;
+    advance_head();
+    path = opts_.dir / segment_name(next_seq_);
+    fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  }
+  if (fd < 0) {
+    failed(errno);
+    append_failed_ = true;
+    return nullptr;
+  }
+  Segment& seg = segments_[next_seq_];
   seg.fd = fd;
   tail_.clear();
   tail_base_ = 0;
-  delete_consumed_segments();  // the previous one may be fully acked already
-  return seg;
+  delete_consumed_segments(false);  // the previous one may be fully acked already
+  return &seg;
 }
 
-std::uint64_t DiskQueue::push(const QueuedMessage& m) { return push(m.topic, m.payload, m.qos, m.retained); }
+std::uint64_t DiskQueue::refuse() {
+  ++counters_.dropped_full;
+  return 0;
+}
 
-std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained) {
+std::uint64_t DiskQueue::push(const QueuedMessage& m, bool durable) {
+  return push(m.topic, m.payload, m.qos, m.retained, durable);
+}
+
+std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained,
+                              bool durable) {
   const std::size_t tlen = std::min<std::size_t>(topic.size(), 0xffff);
   const std::size_t body = kBodyFixed + tlen + payload.size();
   const std::uint64_t size = kHeader + body;
@@ -259,18 +382,26 @@ std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, 
   }
   enforce_bounds(size);
 
-  const std::uint64_t seq = next_seq_;
-  Segment& seg = writable_segment(seq, size);
-  const std::uint64_t first = segments_.rbegin()->first;
-  if (opts_.buffered_writes && seg.size - seg.written + size > opts_.write_buffer_bytes) flush_segment(seg);
+  Segment* seg = writable_segment(size);
+  if (seg == nullptr && free_space()) seg = writable_segment(size);
+  if (seg == nullptr) return refuse();
+  if (opts_.buffered_writes && seg->size - seg->written + size > opts_.write_buffer_bytes) {
+    // The buffer is full: write it out. Not while appends fail (flush()
+    // retries), so a full disk costs no write() per message.
+    if (append_failed_ || !flush_segment(*seg)) {
+      if (free_space() && (seg = writable_segment(size)) == nullptr) return refuse();
+      if (seg->size - seg->written + size > opts_.write_buffer_bytes) return refuse();
+    }
+  }
   // The tail cache keeps at most about one segment; past that (a segment
   // larger than the cap, or a huge record) it starts again after a flush.
   const std::uint64_t cap = std::max<std::uint64_t>(opts_.segment_bytes, 1u << 20) + (1u << 16);
   if (tail_.size() + size > cap) {
-    flush_segment(seg);
+    if (!flush_segment(*seg)) return refuse();
     tail_.clear();
-    tail_base_ = seg.size;
+    tail_base_ = seg->size;
   }
+  const std::uint64_t seq = next_seq_;
   const std::size_t at = tail_.size();
   tail_.resize(at + size);
   char* p = tail_.data() + at;
@@ -285,19 +416,24 @@ std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, 
   put_le(p + 4, crc32(b, body), 4);
 
   if (!opts_.buffered_writes) {
-    if (!pwrite_all(seg.fd, p, size, seg.size)) {
-      int e = errno;
-      (void)::ftruncate(seg.fd, static_cast<off_t>(seg.size));  // no half record stays
+    if (!pwrite_all(seg->fd, p, size, seg->size)) {
+      const int e = errno;
+      (void)::ftruncate(seg->fd, static_cast<off_t>(seg->size));  // no half record stays
       tail_.resize(at);
-      errno = e;
-      throw_errno("append to message queue");
+      failed(e);
+      append_failed_ = true;
+      (void)free_space();  // for the next push
+      return refuse();
     }
-    seg.written = seg.size + size;
+    seg->written = seg->size + size;
+    counters_.storage_bytes += size;
+    append_failed_ = false;
   }
-  entries_.push_back(Entry{first, seg.size, static_cast<std::uint32_t>(size), static_cast<std::uint8_t>(qos == 0 ? 0 : 1), State::Live});
+  entries_.push_back(Entry{segments_.rbegin()->first, seg->size, static_cast<std::uint32_t>(size),
+                           static_cast<std::uint8_t>(qos == 0 ? 0 : 1), State::Live, durable});
   (qos == 0 ? live_qos0_ : live_qos1_).push_back(seq);
-  seg.size += size;
-  seg.dirty = true;
+  seg->size += size;
+  if (durable) seg->unsynced = true;
   counters_.disk_bytes += size;
   ++next_seq_;
   ++live_;
@@ -305,6 +441,7 @@ std::uint64_t DiskQueue::push(std::string_view topic, std::string_view payload, 
   ++counters_.written;
   counters_.depth = live_;
   counters_.bytes = live_bytes_;
+  if (storage_error_ && !opts_.buffered_writes) update_error_state();
   return seq;
 }
 
@@ -367,29 +504,63 @@ void DiskQueue::enforce_bounds(std::uint64_t incoming) {
 void DiskQueue::advance_head() {
   const std::uint64_t old = head_;
   while (!entries_.empty() && entries_.front().state != State::Live) {
+    if (entries_.front().durable) head_sync_needed_ = true;
     entries_.pop_front();
     ++head_;
   }
   if (cursor_ < head_) cursor_ = head_;
   if (head_ == old) return;
   write_head();
-  delete_consumed_segments();
+  delete_consumed_segments(false);
 }
 
-void DiskQueue::delete_consumed_segments() {
-  // Segments wholly below the head go, except the one appended to.
-  while (segments_.size() > 1) {
+// Segments wholly below the head go; the last one (appended to) only with
+// including_last and when everything pushed is acked or dropped (its
+// unwritten buffer goes with it). Deleting before the position is written
+// is safe: replay fills the missing prefix with dropped entries, and every
+// record in a deleted file was acked or dropped. So the position write is
+// tried first (fewer repeats after a crash) but its failure stops nothing.
+void DiskQueue::delete_consumed_segments(bool including_last) {
+  while (!segments_.empty()) {
     auto it = segments_.begin();
     auto nx = std::next(it);
-    if (nx->first > head_) break;
-    // The position goes to disk before the file it makes obsolete goes.
-    if (head_unwritten_) persist_head();
-    if (rd_valid_ && rd_segment_ == it->first) rd_valid_ = false;
-    ::close(it->second.fd);
-    counters_.disk_bytes -= it->second.size;
-    ::unlink((opts_.dir / segment_name(it->first)).c_str());
-    segments_.erase(it);
+    const bool consumed = nx != segments_.end() ? nx->first <= head_ : including_last && head_ == next_seq_;
+    if (!consumed) break;
+    if (head_unwritten_) (void)persist_head();
+    delete_segment(it);
   }
+}
+
+void DiskQueue::delete_segment(std::map<std::uint64_t, Segment>::iterator it) {
+  if (rd_valid_ && rd_segment_ == it->first) rd_valid_ = false;
+  if (std::next(it) == segments_.end()) {
+    tail_.clear();
+    tail_base_ = 0;
+  }
+  ::close(it->second.fd);
+  counters_.disk_bytes -= it->second.size;
+  ::unlink((opts_.dir / segment_name(it->first)).c_str());
+  segments_.erase(it);
+}
+
+// After a failed write: frees what can be freed (see the header). True if
+// a file went.
+bool DiskQueue::free_space() {
+  const auto before = segments_.size();
+  delete_consumed_segments(true);
+  return segments_.size() < before;
+}
+
+void DiskQueue::failed(int err) {
+  ++counters_.write_errors;
+  if (!storage_error_) storage_error_ = std::error_code(err != 0 ? err : EIO, std::generic_category());
+}
+
+// Cleared only after records were written again (append_failed_ false), so
+// a disk that is still full does not end its episode just because nothing
+// was pending for a moment.
+void DiskQueue::update_error_state() {
+  if (storage_error_ && !append_failed_ && !flush_pending() && !head_unwritten_) storage_error_.clear();
 }
 
 bool DiskQueue::next(Item& out) {
@@ -398,7 +569,14 @@ bool DiskQueue::next(Item& out) {
     Entry* e = entry(seq);
     if (e == nullptr || e->state != State::Live) continue;
     const char* rec = record(*e);
-    if (rec == nullptr) continue;
+    if (rec == nullptr) {
+      // Unreadable (a read error): skip it rather than stop the queue.
+      drop(seq, counters_.corrupt_records);
+      advance_head();
+      counters_.depth = live_;
+      counters_.bytes = live_bytes_;
+      continue;
+    }
     const char* b = rec + kHeader;
     const std::size_t body = e->size - kHeader;
     const auto tlen = static_cast<std::size_t>(get_le(b + 10, 2));
@@ -412,6 +590,14 @@ bool DiskQueue::next(Item& out) {
   return false;
 }
 
+std::uint64_t DiskQueue::peek() {
+  for (; cursor_ < next_seq_; ++cursor_) {
+    const Entry* e = entry(cursor_);
+    if (e != nullptr && e->state == State::Live) return cursor_;
+  }
+  return 0;
+}
+
 const char* DiskQueue::record(const Entry& e) {
   auto it = segments_.find(e.segment);
   if (it == segments_.end()) return nullptr;
@@ -421,10 +607,10 @@ const char* DiskQueue::record(const Entry& e) {
     // Read ahead (records written before this run, or older segments) up
     // to what is in the file.
     const std::uint64_t end = std::min<std::uint64_t>(it->second.written, e.offset + std::max<std::uint64_t>(e.size, 256u << 10));
-    if (end < e.offset + e.size) throw std::system_error(EIO, std::generic_category(), "read message queue: record not in file");
     rd_valid_ = false;
+    if (end < e.offset + e.size) return nullptr;
     rd_buf_.resize(end - e.offset);
-    if (!pread_all(it->second.fd, rd_buf_.data(), rd_buf_.size(), e.offset)) throw_errno("read message queue");
+    if (!pread_all(it->second.fd, rd_buf_.data(), rd_buf_.size(), e.offset)) return nullptr;
     rd_segment_ = e.segment;
     rd_offset_ = e.offset;
     rd_valid_ = true;
@@ -443,6 +629,12 @@ std::uint64_t DiskQueue::unsent() const {
   return n;
 }
 
+bool DiskQueue::has_unsent() const {
+  for (std::uint64_t s = std::max(cursor_, head_); s < next_seq_; ++s)
+    if (entries_[static_cast<std::size_t>(s - head_)].state == State::Live) return true;
+  return false;
+}
+
 bool DiskQueue::ack(std::uint64_t seq) {
   Entry* e = entry(seq);
   if (e == nullptr || e->state != State::Live) return false;
@@ -456,43 +648,60 @@ bool DiskQueue::ack(std::uint64_t seq) {
   return true;
 }
 
-void DiskQueue::flush_segment(Segment& seg) {
-  if (seg.written >= seg.size) return;
+bool DiskQueue::flush_segment(Segment& seg) {
+  if (seg.written >= seg.size) return true;
   // Only the last segment has buffered bytes, all in tail_.
   const char* p = tail_.data() + (seg.written - tail_base_);
-  if (!pwrite_all(seg.fd, p, seg.size - seg.written, seg.written)) {
-    int e = errno;
+  const std::uint64_t n = seg.size - seg.written;
+  if (!pwrite_all(seg.fd, p, n, seg.written)) {
+    const int e = errno;
     (void)::ftruncate(seg.fd, static_cast<off_t>(seg.written));  // no half record stays
-    errno = e;
-    throw_errno("append to message queue");
+    failed(e);
+    append_failed_ = true;
+    return false;
   }
   seg.written = seg.size;
+  counters_.storage_bytes += n;
+  append_failed_ = false;
+  return true;
 }
 
 bool DiskQueue::flush_pending() const {
   return !segments_.empty() && segments_.rbegin()->second.written < segments_.rbegin()->second.size;
 }
 
-void DiskQueue::flush(bool with_position) {
-  if (!segments_.empty()) flush_segment(segments_.rbegin()->second);
-  if (with_position && head_unwritten_) persist_head();
+bool DiskQueue::flush(bool with_position) {
+  bool ok = segments_.empty() || flush_segment(segments_.rbegin()->second);
+  if (!ok && free_space() && !flush_pending()) ok = true;  // all acked: nothing needs writing
+  if (with_position && head_unwritten_) ok = persist_head() && ok;
+  update_error_state();
+  return ok;
 }
 
 void DiskQueue::sync() {
-  try {
-    flush();
-    if (head_unwritten_) persist_head();
-  } catch (const std::system_error&) {
-    // Still buffered; the next flush() or sync() tries again.
-  }
+  (void)flush(true);
   for (auto& [first, seg] : segments_) {
-    if (seg.dirty) {
-      (void)::fdatasync(seg.fd);
-      seg.dirty = false;
+    if (!seg.unsynced) continue;
+    ++counters_.syncs;
+    if (::fdatasync(seg.fd) != 0) {
+      failed(errno);
+      continue;
     }
+    seg.unsynced = seg.written < seg.size;  // the rest once it is written
   }
-  if (head_dirty_ && head_fd_ >= 0) (void)::fdatasync(head_fd_);
-  head_dirty_ = false;
+  if (head_sync_needed_ && !head_unwritten_ && head_fd_ >= 0) {
+    ++counters_.syncs;
+    if (::fdatasync(head_fd_) == 0)
+      head_sync_needed_ = false;
+    else
+      failed(errno);
+  }
+}
+
+std::vector<std::string> DiskQueue::take_warnings() {
+  std::vector<std::string> out;
+  out.swap(warnings_);
+  return out;
 }
 
 }  // namespace gateway::mqtt

@@ -2,6 +2,7 @@
 
 #include "mqtt/mqtt_codec.hpp"
 #include "mqtt/mqtt_connection.hpp"
+#include "mqtt/stall_detector.hpp"
 #include "mqtt/topic_filter.hpp"
 #include "request_codec.hpp"
 
@@ -70,8 +71,12 @@ std::string normalize_server_uri(const std::string& uri) {
 
 namespace {
 // The publisher batches the queue's writes (see publisher.hpp, Delivery).
-DiskQueueOptions buffered(DiskQueueOptions o) {
-  o.buffered_writes = true;
+OutboundQueueOptions queue_options(const MqttConfig& c) {
+  OutboundQueueOptions o;
+  o.disk = c.queue;
+  o.disk.buffered_writes = true;
+  o.memory_max_bytes = c.memory_max_bytes;
+  o.memory_max_messages = c.memory_max_messages;
   return o;
 }
 
@@ -90,8 +95,9 @@ constexpr std::uint64_t kControlPid = ~std::uint64_t{0};  // status, replies, SU
 
 struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestHandler h)
-      : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(buffered(cfg.queue)),
+      : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(queue_options(cfg)),
         sync_timer(io_ctx), retry_timer(io_ctx), pid_slot(65536, kFreePid) {
+    for (const auto& w : queue.disk().take_warnings()) log.warn("mqtt: queue: " + w);
     uri = normalize_server_uri(cfg.server_uri);
     endpoint = parse_endpoint(uri);
     version = cfg.mqtt_version >= 5 ? codec::kMqtt5 : codec::kMqtt311;
@@ -103,11 +109,12 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   MqttConfig cfg;
   Logger& log;
   RequestHandler handler;
-  DiskQueue queue;
+  OutboundQueue queue;
   asio::steady_timer sync_timer;
   asio::steady_timer retry_timer;
-  static constexpr std::chrono::seconds kStallTimeout{30};
-  std::chrono::steady_clock::time_point last_progress{};
+  StallDetector stall;
+  std::error_code storage_error;            // as last logged
+  std::uint64_t dropped_at_storage_error = 0;
   std::string uri;
   Endpoint endpoint;
   std::unique_ptr<asio::ssl::context> tls_ctx;
@@ -140,7 +147,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   std::size_t inflight_q1 = 0;               // queue messages awaiting PUBACK
   std::vector<std::uint64_t> unwritten_q0;   // QoS 0 seqs not yet in the kernel
   std::uint64_t socket_writes_before = 0;    // writes of earlier connections
-  DiskQueue::Item item;                      // reused by drain()
+  OutboundQueue::Item item;                  // reused by drain()
   std::vector<std::uint8_t> suback_codes;
   std::string scratch;                       // stop()'s last packets
   bool acks_in_batch = false;
@@ -155,18 +162,23 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     connect();
   }
 
-  // Every sync_interval (or 1 s without syncing): fdatasync the queue, and
-  // unstick delivery if it stopped (no PUBACK for kStallTimeout while
-  // messages are in flight, or messages pending with none in flight):
-  // resend from the oldest unacked, as after a reconnect.
+  // Every sync_interval (or 1 s without syncing): write what the queue
+  // buffered and its position, fdatasync what is durable and not yet synced
+  // (nothing at all while only `outage`/`memory` messages flow), log a
+  // storage failure or its end (once per episode), and unstick delivery if
+  // the StallDetector says it stopped: resend from the oldest unacked, as
+  // after a reconnect.
   void arm_sync() {
     const auto period = cfg.sync_interval.count() > 0 ? cfg.sync_interval : std::chrono::milliseconds(1000);
     sync_timer.expires_after(period);
     sync_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
       auto self = weak.lock();
       if (ec || !self || !self->running) return;
-      self->flush_queue(true);  // records and the ack position
-      if (self->cfg.sync_interval.count() > 0) self->queue.sync();
+      if (self->cfg.sync_interval.count() > 0)
+        self->queue.disk().sync();  // flushes records and the position first
+      else
+        self->queue.disk().flush(true);
+      self->check_storage();
       self->check_stall();
       self->arm_sync();
     });
@@ -174,16 +186,36 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
 
   std::size_t in_flight() const { return inflight_q1 + unwritten_q0.size(); }
 
+  void check_storage() {
+    const std::error_code now = queue.disk().storage_error();
+    if (now == storage_error) return;
+    const std::uint64_t dropped = queue.dropped();
+    if (now && !storage_error) {
+      log.error("mqtt: queue storage in " + cfg.queue.dir.string() + " failing (" + now.message() +
+                "): queued messages are kept and sent, new ones that cannot be stored are dropped; retrying");
+      dropped_at_storage_error = dropped;
+    } else if (!now) {
+      log.warn("mqtt: queue storage writable again; " + std::to_string(dropped - dropped_at_storage_error) +
+               " messages dropped meanwhile");
+    }
+    storage_error = now;
+  }
+
   void check_stall() {
     if (!connected) return;
     const auto now = std::chrono::steady_clock::now();
-    const bool idle_but_pending = in_flight() == 0 && queue.depth() > 0;
-    const bool no_progress = in_flight() > 0 && now - last_progress > kStallTimeout;
-    if (!idle_but_pending && !no_progress) return;
-    log.warn("mqtt: delivery stalled with " + std::to_string(in_flight()) + " in flight; resending from " +
-             std::to_string(queue.head_seq()));
+    StallDetector::Observation o;
+    o.in_flight = in_flight();
+    o.unsent = o.in_flight == 0 && queue.depth() > 0 && queue.has_unsent();
+    o.send_scheduled = pump_posted || buffer_full || (conn && conn->pending() > 0);
+    const auto verdict = stall.check(now, o);
+    if (verdict == StallDetector::Verdict::Ok) return;
+    ++counters.stalls;
+    log.warn(std::string("mqtt: delivery stalled (") +
+             (verdict == StallDetector::Verdict::NoProgress ? "no acknowledgement for 30 s" : "nothing sent for 5 s") +
+             ") with " + std::to_string(in_flight()) + " in flight; resending from " +
+             std::to_string(queue.disk().head_seq()));
     forget_in_flight(false);
-    last_progress = now;
     queue.rewind();
     drain();
   }
@@ -348,6 +380,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     log.info("mqtt: connected to " + uri + " with MQTT " + (v5 ? "5" : "3.1.1") +
              (receive_max > 0 ? ", receive maximum " + std::to_string(receive_max) : std::string()));
     forget_in_flight(true);
+    queue.set_online(true);
     // The online status before the backlog, then the request subscriptions.
     send_control(status_topic(), cfg.online_payload, true, nullptr);
     if (cfg.accept_requests) {
@@ -363,10 +396,10 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
       }
     }
     queue.rewind();
-    last_progress = std::chrono::steady_clock::now();
+    stall.reset(std::chrono::steady_clock::now());
     if (log.enabled(LogLevel::Debug))
-      log.debug("mqtt: sending from " + std::to_string(queue.head_seq()) + ", " + std::to_string(queue.depth()) +
-                " queued");
+      log.debug("mqtt: sending from " + std::to_string(queue.disk().head_seq()) + ", " +
+                std::to_string(queue.depth()) + " queued");
     drain();
     if (conn) conn->flush();  // status and SUBSCRIBE when the queue is empty
   }
@@ -396,7 +429,8 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     if (!connected) return;
     connected = false;
     forget_in_flight(true);
-    queue.rewind();  // resend everything unacked, in order, after reconnect
+    queue.rewind();            // resend everything unacked, in order, after reconnect
+    queue.set_online(false);   // `outage` messages in memory go to disk
     log.warn("mqtt: " + why + "; " + std::to_string(queue.depth()) + " messages queued");
     if (running) schedule_retry();
   }
@@ -471,7 +505,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
   void on_batch_end() {
     if (acks_in_batch) {
       acks_in_batch = false;
-      last_progress = std::chrono::steady_clock::now();
+      stall.progress(std::chrono::steady_clock::now());
     }
     const std::uint64_t writes = conn ? conn->writes() : 0;
     drain();
@@ -488,7 +522,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     for (auto seq : unwritten_q0)
       if (queue.ack(seq)) ++counters.acked;
     unwritten_q0.clear();
-    last_progress = std::chrono::steady_clock::now();
+    stall.progress(std::chrono::steady_clock::now());
     // A drain stopped by kMaxBuffered continues (not from inside drain()).
     if (!draining && buffer_full) schedule_pump();
   }
@@ -497,7 +531,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     // Whoever drains (pump, PUBACK batch, reconnect, retry): what is sent
     // is written to the queue's files first.
     if (!connected || !conn) return;
-    if (queue.flush_pending()) flush_queue();
+    if (queue.disk().flush_pending()) flush_queue();
     const std::size_t limit = window();
     // Refill only once at most half the window is in flight: the window
     // goes out in a few large writes instead of one write per PUBACK read
@@ -571,24 +605,16 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     });
   }
 
-  void flush_queue(bool with_position = false) {
-    try {
-      queue.flush(with_position);
-    } catch (const std::exception& e) {
-      // Kept in memory and retried (next publish, ack or sync tick).
-      log.error(std::string("mqtt: queue write failed: ") + e.what());
-    }
+  // Writes what the queue buffered. While storage fails only the sync
+  // timer retries (the records stay in memory and are sent meanwhile), so a
+  // full disk costs no write() per message; check_storage() logs it.
+  void flush_queue() {
+    if (!queue.disk().storage_error()) (void)queue.disk().flush();
   }
 
-  void publish(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained) {
+  void publish(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained, StorageMode mode) {
     ++counters.published;
-    try {
-      queue.push(topic, payload, qos, retained);
-    } catch (const std::exception& e) {
-      ++counters.dropped;
-      log.error(std::string("mqtt: queue write failed: ") + e.what());
-      return;
-    }
+    if (queue.push(topic, payload, qos, retained, mode) == 0) return;  // dropped: counted by the queue
     schedule_pump();
   }
 
@@ -785,7 +811,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
       // farewell, the offline status (retained) and DISCONNECT. The broker
       // handles them in order, so the Will is not sent.
       scratch.clear();
-      if (queue.flush_pending()) flush_queue();
+      flush_queue();
       std::vector<std::uint64_t> tail_q0;  // leave the queue once written, as in on_drained()
       while (inflight_q1 < window() && scratch.size() < kMaxBuffered && queue.next(item)) {
         codec::Publish p;
@@ -832,21 +858,23 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     connected = false;
     connecting = false;
     forget_in_flight(true);
+    queue.rewind();
+    queue.set_online(false);  // `outage` messages still in memory go to disk for the next run
     // Unacknowledged messages are replayed by the next run; the farewell
     // must come after them again (and at all, when it was not sent now).
     if (!last.messages.empty() && (!farewell_sent || queue.depth() > 0)) {
-      for (const auto& m : last.messages) publish(m.topic, m.payload, m.qos, m.retained);
+      for (const auto& m : last.messages) publish(m.topic, m.payload, m.qos, m.retained, StorageMode::Disk);
     }
-    flush_queue(true);
-    queue.sync();
+    flush_queue();
+    queue.disk().sync();
   }
 
   Counters snapshot() const {
     Counters c = counters;
-    const auto& q = queue.counters();
-    c.dropped += q.dropped() + c.rejected;
+    c.dropped += queue.dropped() + c.rejected;
     c.queue_depth = queue.depth();
-    c.queue_bytes = q.bytes;
+    c.queue_bytes = queue.disk().counters().bytes + queue.counters().memory_bytes;
+    c.storage_failing = static_cast<bool>(queue.disk().storage_error());
     c.in_flight = in_flight();
     c.connected = connected;
     c.mqtt_version = connected ? version : 0;
@@ -868,14 +896,22 @@ void MqttPublisher::publish(const EncodedEventPtr& ev) { publish(ev, impl_->cfg.
 void MqttPublisher::publish(const EncodedEventPtr& ev, PayloadFormat format) {
   if (!ev) return;
   const auto k = static_cast<std::size_t>(ev->kind);
-  impl_->publish(ev->topic, format == PayloadFormat::Json ? ev->json : ev->binary,
-                 k < kEventKindCount ? impl_->cfg.qos[k] : 1, ev->retained);
+  const bool known = k < kEventKindCount;
+  impl_->publish(ev->topic, format == PayloadFormat::Json ? ev->json : ev->binary, known ? impl_->cfg.qos[k] : 1,
+                 ev->retained, known ? impl_->cfg.storage[k] : StorageMode::Disk);
 }
 
-void MqttPublisher::publish(const QueuedMessage& m) { impl_->publish(m.topic, m.payload, m.qos, m.retained); }
+void MqttPublisher::publish(const QueuedMessage& m) {
+  publish(m, m.qos == 0 ? StorageMode::Outage : StorageMode::Disk);
+}
+
+void MqttPublisher::publish(const QueuedMessage& m, StorageMode mode) {
+  impl_->publish(m.topic, m.payload, m.qos, m.retained, mode);
+}
 
 MqttPublisher::Counters MqttPublisher::counters() const { return impl_->snapshot(); }
-const DiskQueue::Counters& MqttPublisher::queue_counters() const { return impl_->queue.counters(); }
+const DiskQueue::Counters& MqttPublisher::queue_counters() const { return impl_->queue.disk().counters(); }
+const OutboundQueue::Counters& MqttPublisher::tier_counters() const { return impl_->queue.counters(); }
 std::string MqttPublisher::status_topic() const { return impl_->status_topic(); }
 
 }  // namespace gateway::mqtt

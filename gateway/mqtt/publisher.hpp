@@ -1,41 +1,65 @@
-// MQTT side of the gateway: publishes encoded events through a crash-safe
-// DiskQueue and takes SDO/NMT requests (../shared/api-contract.md).
+// MQTT side of the gateway: publishes encoded events through an
+// OutboundQueue (a bounded memory tier and a crash-safe DiskQueue) and takes
+// SDO/NMT requests (../shared/api-contract.md).
 //
-// Delivery: publish() appends to the DiskQueue (in memory) and returns; a
-// handler it posts (once per io loop turn) writes the turn's messages to
-// the queue's files with one write() and then encodes them and writes
+// Storage: each event kind has a StorageMode (MqttConfig::storage;
+// outbound_queue.hpp). `disk` (default for QoS 1 kinds): written to the
+// DiskQueue and fdatasync'ed. `outage` (default for QoS 0 kinds): kept in
+// memory while the broker is connected, so a healthy link costs no storage
+// writes at all; written to the DiskQueue (never fdatasync'ed on its own)
+// while the broker is unreachable or the memory tier is full, and
+// everything of it still in memory moves there when the connection is lost
+// or the publisher stops. `memory`: never on storage, oldest dropped when
+// the tier is full. publish(QueuedMessage) uses `outage` for QoS 0 and
+// `disk` otherwise.
+//
+// Delivery: publish() queues (in memory) and returns; a handler it posts
+// (once per io loop turn) writes the turn's `disk`/spilled records to the
+// queue's files with one write() and then encodes the messages and writes
 // them to the socket, all that the window allows in ONE write (the
 // publisher's own MQTT client, mqtt_codec.hpp and mqtt_connection.hpp, on
 // the caller's io_context; no threads). A read of the socket handles all
 // PUBACKs that arrived; the window is refilled, with one write, once at
 // most half of it is in flight (so a window goes out in a few large writes,
-// not one write per PUBACK read). So a
-// message given to publish() is in the kernel (survives kill -9 of the
-// gateway) once the io thread has finished the handlers ready in the same
-// turn, and before it is sent; a kill -9 loses at most the messages
-// published in the current turn. The queue is fdatasync'ed every
-// sync_interval (power loss: at most that much lost); the acknowledged
-// position is written at the same tick (or when a segment file is deleted),
-// so after a crash up to sync_interval of already delivered messages may
-// be sent again. While connected
-// an in-flight window (Config::inflight_window, capped by the broker's MQTT 5
-// Receive Maximum less 4 for status and replies) drains the queue in order,
-// and a message leaves the queue when the broker acknowledges it (PUBACK for
-// QoS 1, handed to the kernel's socket buffer for QoS 0). On a connection loss everything
-// unacknowledged is sent again, oldest first, after the reconnect; so order
-// holds across outages and a QoS 1 message is delivered at least once
-// (a duplicate only when a PUBACK was lost with the connection). The
-// session is clean (clean start / clean session, MQTT 5 Session Expiry 0):
-// the queue, not the broker, holds the backlog. As a
-// safety net, if no PUBACK comes for 30 s while messages are in flight (or
-// messages are pending with none in flight) on a live connection, sending
-// restarts from the oldest unacked message (duplicates possible, no loss).
-// A message the broker refuses (MQTT 5 PUBACK reason >= 0x80) or that
-// cannot be encoded (empty topic, wildcards, not UTF-8, over the broker's
-// Maximum Packet Size) is dropped and counted in `rejected`, so one bad
-// message cannot block the queue. Under MQTT 5 the broker's Maximum QoS 0
-// sends QoS 1 messages as QoS 0, and Retain Available 0 clears the retain
-// flag.
+// not one write per PUBACK read). So a `disk` message given to publish()
+// is in the kernel (survives kill -9 of the gateway) once the io thread has
+// finished the handlers ready in the same turn, and before it is sent; a
+// kill -9 loses at most the messages published in the current turn (and
+// the `outage`/`memory` messages in memory). Every sync_interval the
+// queue's position is written and what holds unsynced `disk` data is
+// fdatasync'ed (power loss: at most that much lost); with no unsynced
+// `disk` data there is no fdatasync. After a crash up to sync_interval of
+// already delivered messages may be sent again. While connected an
+// in-flight window (Config::inflight_window, capped by the broker's MQTT 5
+// Receive Maximum less 4 for status and replies) drains the queue in
+// publish order, and a message leaves the queue when the broker
+// acknowledges it (PUBACK for QoS 1, handed to the kernel's socket buffer
+// for QoS 0). On a connection loss everything unacknowledged is sent again,
+// oldest first, after the reconnect; so order holds across outages (per
+// topic; across kinds too unless the memory tier overflowed) and a QoS 1
+// message is delivered at least once (a duplicate only when a PUBACK was
+// lost with the connection). The session is clean (clean start / clean
+// session, MQTT 5 Session Expiry 0): the queue, not the broker, holds the
+// backlog. A message the broker refuses (MQTT 5 PUBACK reason >= 0x80) or
+// that cannot be encoded (empty topic, wildcards, not UTF-8, over the
+// broker's Maximum Packet Size) is dropped and counted in `rejected`, so
+// one bad message cannot block the queue. Under MQTT 5 the broker's Maximum
+// QoS 0 sends QoS 1 messages as QoS 0, and Retain Available 0 clears the
+// retain flag.
+//
+// Stalls (StallDetector, checked on the sync timer): no acknowledgement for
+// 30 s while messages are in flight, or messages waiting for 5 s with none
+// in flight and no send scheduled, on a live connection: sending restarts
+// from the oldest unacked message (duplicates possible, no loss; counted in
+// `stalls`). A message merely waiting for the pump handler of its turn is
+// not a stall.
+//
+// Storage failures (disk full, I/O errors): see disk_queue.hpp. The
+// publisher keeps running and sending; messages that cannot be stored are
+// dropped (newest first, counted), the failure and its end are logged once
+// per episode, and writing resumes by itself (retried on the sync timer).
+// Warnings of the queue's open (corrupt records skipped, unknown files
+// ignored) are logged by the constructor.
 //
 // Connection: the gateway's own reconnect loop with exponential backoff
 // (reconnect_min doubling to reconnect_max); connect_timeout covers TCP
@@ -85,7 +109,7 @@
 
 #include "event_message.hpp"
 #include "log.hpp"
-#include "mqtt/disk_queue.hpp"
+#include "mqtt/outbound_queue.hpp"
 #include "requests.hpp"
 
 namespace gateway::mqtt {
@@ -98,6 +122,13 @@ constexpr std::size_t kEventKindCount = 10;  // EventKind values
 // a subscriber must not miss), 0 for the high-rate heartbeat, tpdo, pdo,
 // sync and time.
 constexpr std::array<std::uint8_t, kEventKindCount> kDefaultQos = {1, 1, 1, 0, 1, 0, 0, 0, 0, 1};
+// Default storage per EventKind: `disk` for the QoS 1 kinds, `outage` for
+// the QoS 0 ones.
+constexpr std::array<StorageMode, kEventKindCount> kDefaultStorage = [] {
+  std::array<StorageMode, kEventKindCount> a{};
+  for (std::size_t k = 0; k < kEventKindCount; ++k) a[k] = kDefaultQos[k] == 0 ? StorageMode::Outage : StorageMode::Disk;
+  return a;
+}();
 
 struct MqttConfig {
   std::string server_uri;   // tcp:// ssl:// mqtt:// mqtts:// (host[:port])
@@ -119,9 +150,14 @@ struct MqttConfig {
   std::string offline_payload = R"({"state":"offline"})";  // the Will
   std::array<std::uint8_t, kEventKindCount> qos = kDefaultQos;  // by EventKind
   PayloadFormat format = PayloadFormat::Json;
+  std::array<StorageMode, kEventKindCount> storage = kDefaultStorage;  // by EventKind
   DiskQueueOptions queue;   // queue.dir MUST be set; one directory per publisher
-  // fdatasync of the queue, on the io thread (it blocks for the sync: on a
-  // slow disk choose a longer interval; 0 = never, page cache only).
+  // The memory tier (`outage` messages while connected, `memory` ones).
+  std::uint64_t memory_max_bytes = 16ull << 20;
+  std::uint64_t memory_max_messages = 100'000;
+  // fdatasync of the queue's unsynced `disk` data, on the io thread (it
+  // blocks for the sync: on a slow disk choose a longer interval; 0 =
+  // never, page cache only).
   std::chrono::milliseconds sync_interval{100};
   // QoS 1 messages in flight. Under MQTT 5 the broker's Receive Maximum
   // less 4 caps it (mosquitto: 20 by default, so 16).
@@ -155,11 +191,13 @@ class MqttPublisher {
     std::uint64_t replies = 0;
     std::uint64_t replies_dropped = 0;  // not connected when the reply was ready
     std::uint64_t socket_writes = 0;    // send()/write calls on the sockets (batching)
+    std::uint64_t stalls = 0;           // StallDetector restarts
+    bool storage_failing = false;       // the DiskQueue cannot write (see storage failures)
     bool connected = false;
     int mqtt_version = 0;               // of the current connection: 5 or 4
   };
 
-  // Opens the DiskQueue (throws std::system_error) and validates the URI
+  // Opens the queue (throws std::system_error) and validates the URI
   // (throws std::invalid_argument). Does not connect: call start().
   MqttPublisher(boost::asio::io_context& io, MqttConfig cfg, Logger& log, RequestHandler handler = {});
   ~MqttPublisher();
@@ -190,12 +228,16 @@ class MqttPublisher {
   void stop(std::chrono::milliseconds timeout = std::chrono::seconds(2), const Farewell& last = {});
 
   // Never blocks on the network: queued, sent when the window allows.
+  // Events use the storage mode of their kind; a QueuedMessage `outage`
+  // for QoS 0 and `disk` otherwise, unless given.
   void publish(const EncodedEventPtr& ev);
   void publish(const EncodedEventPtr& ev, PayloadFormat format);
   void publish(const QueuedMessage& m);
+  void publish(const QueuedMessage& m, StorageMode mode);
 
   Counters counters() const;
-  const DiskQueue::Counters& queue_counters() const;
+  const DiskQueue::Counters& queue_counters() const;     // the disk tier
+  const OutboundQueue::Counters& tier_counters() const;  // the memory tier and spills
   std::string status_topic() const;
 
   struct Impl;

@@ -56,6 +56,16 @@ http::Response metrics_response(const App& app, const http::HttpServer& server) 
     s.mqtt_queue_bytes = mq->queue_bytes;
     s.mqtt_reconnects = mq->reconnects;
     s.mqtt_requests_refused = mq->requests_refused;
+    s.mqtt_dropped_by_reason = mq->dropped_by_reason;
+    s.mqtt_memory_depth = mq->memory_depth;
+    s.mqtt_spilled = mq->spilled;
+    s.mqtt_storage_bytes = mq->storage_bytes;
+    s.mqtt_storage_syncs = mq->storage_syncs;
+    s.mqtt_storage_errors = mq->storage_errors;
+    s.mqtt_storage_failing = mq->storage_failing;
+    s.mqtt_corrupt_records = mq->corrupt_records;
+    s.mqtt_corrupt_bytes = mq->corrupt_bytes;
+    s.mqtt_stalls = mq->stalls;
   }
   const auto hs = server.stats();
   s.ws_clients = hs.ws_clients;

@@ -139,6 +139,40 @@ TEST(Config, EmptyFileGivesDefaults) {
   EXPECT_EQ(m.qos_for(EventKind::Tpdo), 0);   // high rate, the next value replaces it
 }
 
+// Issue 12: where each kind's MQTT messages wait. By default the QoS 0
+// kinds stay in memory while the broker is connected (outage) and the QoS 1
+// ones go to disk; `default` sets every kind wherever it stands in the map.
+TEST(Config, StorageModesPerKindFollowQosByDefault) {
+  MqttConfig m;
+  EXPECT_EQ(m.storage_for(EventKind::Tpdo), StorageMode::Outage);
+  EXPECT_EQ(m.storage_for(EventKind::Heartbeat), StorageMode::Outage);
+  EXPECT_EQ(m.storage_for(EventKind::Emcy), StorageMode::Disk);
+  EXPECT_EQ(m.storage_for(EventKind::State), StorageMode::Disk);
+  m.qos[EventKind::Tpdo] = 1;
+  EXPECT_EQ(m.storage_for(EventKind::Tpdo), StorageMode::Disk);
+
+  const Config c = parse_config(R"(
+mqtt:
+  uri: tcp://x
+  qos: {heartbeat: 1}
+  queue:
+    memory-max-bytes: 1048576
+    memory-max-messages: 5000
+    storage: {heartbeat: memory, default: outage, emcy: disk}
+)", "gw.yaml");
+  EXPECT_EQ(c.mqtt.storage_for(EventKind::Heartbeat), StorageMode::Memory);
+  EXPECT_EQ(c.mqtt.storage_for(EventKind::Emcy), StorageMode::Disk);
+  EXPECT_EQ(c.mqtt.storage_for(EventKind::State), StorageMode::Outage);  // default, though QoS 1
+  EXPECT_EQ(c.mqtt.memory_max_bytes, 1048576U);
+  EXPECT_EQ(c.mqtt.memory_max_messages, 5000U);
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://x\n  queue: {storage: {tpdo: ram}}\n"),
+              HasSubstr("gw.yaml:3: mqtt.queue.storage.tpdo: 'ram' is not disk, outage or memory"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://x\n  queue: {storage: {pdos: disk}}\n"),
+              HasSubstr("mqtt.queue.storage.pdos: unknown event kind"));
+  EXPECT_THAT(config_error("mqtt:\n  uri: tcp://x\n  queue: {storage: disk}\n"),
+              HasSubstr("mqtt.queue.storage: expected kind: mode pairs"));
+}
+
 TEST(Config, ErrorsNameFileLineKeyAndReason) {
   EXPECT_EQ(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 200\n"),
             "gw.yaml:4: networks[0].nodes[0].id: 200 is out of range 1..127");

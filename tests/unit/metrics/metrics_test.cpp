@@ -261,6 +261,34 @@ TEST(RenderMetrics, RequestsLimitedPerCallerByReason) {
   EXPECT_EQ(render_metrics(full_snapshot()).find("requests_limited"), std::string::npos);  // no App counters: no family
 }
 
+// Issue 12: what the MQTT queue's storage does (drops by reason, a full
+// disk, corruption found at start, stalls) is visible without the log.
+TEST(RenderMetrics, MqttStorageFamilies) {
+  auto s = full_snapshot();
+  s.mqtt_dropped_by_reason = {{"storage_full", 12}, {"memory_full", 0}, {"queue_full", 3}};
+  s.mqtt_memory_depth = 7;
+  s.mqtt_spilled = 900;
+  s.mqtt_storage_bytes = 4096;
+  s.mqtt_storage_syncs = 2;
+  s.mqtt_storage_errors = 5;
+  s.mqtt_storage_failing = true;
+  s.mqtt_corrupt_records = 1;
+  s.mqtt_corrupt_bytes = 29;
+  s.mqtt_stalls = 0;
+  const std::string text = render_metrics(s);
+  for (const char* line :
+       {"canopen_gateway_mqtt_dropped_total{reason=\"memory_full\"} 0\n",
+        "canopen_gateway_mqtt_dropped_total{reason=\"queue_full\"} 3\n",
+        "canopen_gateway_mqtt_dropped_total{reason=\"storage_full\"} 12\n", "canopen_gateway_mqtt_memory_queue_depth 7\n",
+        "canopen_gateway_mqtt_spilled_total 900\n", "canopen_gateway_mqtt_storage_written_bytes_total 4096\n",
+        "canopen_gateway_mqtt_storage_syncs_total 2\n", "canopen_gateway_mqtt_storage_errors_total 5\n",
+        "canopen_gateway_mqtt_storage_failing 1\n", "canopen_gateway_mqtt_queue_corrupt_records_total 1\n",
+        "canopen_gateway_mqtt_queue_corrupt_bytes_total 29\n", "canopen_gateway_mqtt_stalls_total 0\n",
+        "# TYPE canopen_gateway_mqtt_storage_failing gauge\n", "# TYPE canopen_gateway_mqtt_dropped_total counter\n"})
+    EXPECT_NE(text.find(line), std::string::npos) << line;
+  EXPECT_EQ(render_metrics(MetricsSnapshot{}).find("mqtt_storage"), std::string::npos);
+}
+
 // Checks the exposition the way a scraper would: every family has exactly one
 // HELP and one TYPE before its samples, every sample line parses as
 // name{labels} value and belongs to the family just declared, and no series

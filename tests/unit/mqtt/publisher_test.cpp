@@ -461,6 +461,86 @@ TEST_F(MqttPublisherTest, BrokerOutageLosesNothingAndKeepsOrder) {
   EXPECT_GE(c.reconnects, 1u);
 }
 
+// Issue 12, item 1: while the broker is connected, events of `outage` kinds
+// (the QoS 0 ones by default: tpdo, heartbeat ...) never touch storage, not
+// even an fdatasync; `disk` kinds still go to disk.
+TEST_F(MqttPublisherTest, OutageEventsCostNoStorageWhileConnected) {
+  start_broker();
+  Subscriber live(broker_->uri(), "nowear", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(live.connect());
+  auto c = config();
+  c.sync_interval = 10ms;
+  start_publisher(c);
+  for (int i = 0; i < 2000; ++i)
+    publish(make_event(EventKind::Tpdo, "canopen/gw1/1/5/tpdo/1", std::to_string(i), false));
+  ASSERT_TRUE(live.wait_count(2000 + 1, 10s)) << "got " << live.messages().size();  // + the status
+  std::this_thread::sleep_for(100ms);  // several sync ticks
+  EXPECT_EQ(payloads(live.on_topic("canopen/gw1/1/5/tpdo/1")), numbers(0, 2000));
+  auto q = io_.call([&] { return pub_->queue_counters(); });
+  EXPECT_EQ(q.written, 0u);
+  EXPECT_EQ(q.storage_bytes, 0u);
+  EXPECT_EQ(q.syncs, 0u);
+
+  publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", "{}", false));  // a `disk` kind
+  ASSERT_TRUE(live.wait_topic("canopen/gw1/1/5/emcy", 5s));
+  ASSERT_TRUE(eventually([&] { return io_.call([&] { return pub_->queue_counters().syncs; }) > 0; }));
+  q = io_.call([&] { return pub_->queue_counters(); });
+  EXPECT_EQ(q.written, 1u);
+  EXPECT_GT(q.storage_bytes, 0u);
+}
+
+// Events of `outage` kinds published while the broker is away go to disk
+// (without fdatasync) and arrive, once and in order, when it is back.
+TEST_F(MqttPublisherTest, OutageEventsDuringABrokerOutageArriveAfterIt) {
+  broker_.emplace(true);
+  broker_->extra_conf = "queue_qos0_messages true\n";  // for the subscriber's offline spell
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+  Subscriber sub(broker_->uri(), "outage-q0", {"canopen/gw1/1/5/tpdo/1"}, {MQTTVERSION_3_1_1, false});
+  ASSERT_TRUE(sub.connect());
+  start_publisher(config());
+  for (int i = 0; i < 100; ++i) publish(make_event(EventKind::Tpdo, "canopen/gw1/1/5/tpdo/1", std::to_string(i), false));
+  ASSERT_TRUE(sub.wait_count(100, 10s));
+  broker_->stop();
+  ASSERT_TRUE(eventually([&] { return !counters().connected; }, 10s));
+  constexpr int kN = 2100;
+  io_.call([&] {
+    for (int i = 100; i < kN; ++i)
+      pub_->publish(make_event(EventKind::Tpdo, "canopen/gw1/1/5/tpdo/1", std::to_string(i), false));
+  });
+  auto q = io_.call([&] { return pub_->queue_counters(); });
+  EXPECT_EQ(q.depth, static_cast<std::uint64_t>(kN - 100));
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+  ASSERT_TRUE(sub.wait_count(kN, 25s)) << "got " << sub.messages().size();
+  std::this_thread::sleep_for(300ms);
+  EXPECT_EQ(sequence_problem(payloads(sub.messages()), kN), "");
+  q = io_.call([&] { return pub_->queue_counters(); });
+  EXPECT_EQ(q.syncs, 0u);  // nothing durable: never synced
+  EXPECT_EQ(counters().dropped, 0u);
+}
+
+// Issue 12, item 5: the sync timer running between a publish and its send
+// (here every millisecond) is not a stall: no restart, no duplicates.
+TEST_F(MqttPublisherTest, SyncTimerBetweenPublishAndSendIsNoStall) {
+  start_broker();
+  Subscriber live(broker_->uri(), "race", {"canopen/gw1/1/5/emcy"}, {});
+  ASSERT_TRUE(live.connect());
+  auto c = config();
+  c.sync_interval = 1ms;
+  start_publisher(c);
+  constexpr int kN = 3000;
+  for (int i = 0; i < kN; i += 10) {
+    io_.call([&] {
+      for (int j = i; j < i + 10; ++j)
+        pub_->publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", std::to_string(j), false));
+    });
+    if (i % 300 == 0) std::this_thread::sleep_for(2ms);
+  }
+  ASSERT_TRUE(live.wait_count(kN, 20s)) << "got " << live.messages().size();
+  std::this_thread::sleep_for(200ms);
+  EXPECT_EQ(sequence_problem(payloads(live.messages()), kN), "");
+  EXPECT_EQ(counters().stalls, 0u);
+}
+
 // kill -9 of a publisher process while the broker is down loses nothing:
 // a new process on the same queue directory delivers all, in order.
 TEST_F(MqttPublisherTest, KillDash9WhileBrokerDownLosesNothing) {
