@@ -39,6 +39,18 @@ std::chrono::system_clock::time_point parse_utc(const std::string& text) {
   return t + std::chrono::duration_cast<std::chrono::system_clock::duration>(std::chrono::nanoseconds(nanos));
 }
 
+// The demo network as gateway "test" on `broker`, its state in `state`.
+Config demo_config(const Broker& broker, const TempDir& state) {
+  CliOptions cli;
+  cli.demo = true;
+  cli.gateway_id = "test";
+  cli.mqtt_uri = broker.uri();
+  Config config = merge(Config{}, cli);
+  config.state_dir = state.path().string();
+  config.mqtt.queue_dir = (state.path() / "q").string();
+  return config;
+}
+
 // api-contract "MQTT topics": canopen/<gw>/<net>/bus is retained; it must be
 // there from the start, not only once the bus state changes (the demo
 // network's never does).
@@ -47,13 +59,7 @@ TEST(AppMqtt, BusTopicIsRetainedFromTheStartWithoutAStateChange) {
   Broker broker;
   ASSERT_TRUE(broker.start()) << broker.log();
   TempDir state;
-  CliOptions cli;
-  cli.demo = true;
-  cli.gateway_id = "test";
-  cli.mqtt_uri = broker.uri();
-  Config config = merge(Config{}, cli);
-  config.state_dir = state.path().string();
-  config.mqtt.queue_dir = (state.path() / "q").string();
+  Config config = demo_config(broker, state);
   Logger log(LogLevel::Error);
   IoThread io;
   std::unique_ptr<App> app;
@@ -98,13 +104,7 @@ TEST(AppMqtt, AfterACleanStopNothingRetainedClaimsANodeRuns) {
   Broker broker;
   ASSERT_TRUE(broker.start()) << broker.log();
   TempDir state;
-  CliOptions cli;
-  cli.demo = true;
-  cli.gateway_id = "test";
-  cli.mqtt_uri = broker.uri();
-  Config config = merge(Config{}, cli);
-  config.state_dir = state.path().string();
-  config.mqtt.queue_dir = (state.path() / "q").string();
+  Config config = demo_config(broker, state);
   Logger log(LogLevel::Error);
   IoThread io;
   std::unique_ptr<App> app;

@@ -15,6 +15,7 @@
 
 #include "auth.hpp"
 #include "unit/rest/rest_rig.hpp"
+#include "support/memory_log.hpp"
 
 namespace gateway {
 namespace {
@@ -58,24 +59,6 @@ std::string concrete(std::string pattern) {
     if (auto p = pattern.find(from); p != std::string::npos) pattern.replace(p, std::string(from).size(), to);
   return pattern;
 }
-
-// A FILE* whose text the test can read (the gateway's log).
-struct MemoryLog {
-  MemoryLog() : file(open_memstream(&buf, &len)) {}
-  ~MemoryLog() {
-    std::fclose(file);
-    std::free(buf);
-  }
-  MemoryLog(const MemoryLog&) = delete;
-  MemoryLog& operator=(const MemoryLog&) = delete;
-  std::string text() {
-    std::fflush(file);
-    return std::string(buf, len);
-  }
-  char* buf = nullptr;
-  std::size_t len = 0;
-  std::FILE* file;
-};
 
 // The REST rig with auth on (as outside --demo), three tokens, a dashboard
 // directory and the log captured for audit lines.

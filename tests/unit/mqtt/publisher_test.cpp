@@ -1,5 +1,6 @@
 // MqttPublisher against a real mosquitto started by the fixture.
 #include "mqtt/publisher.hpp"
+#include "support/memory_log.hpp"
 
 #include <gtest/gtest.h>
 
@@ -32,24 +33,6 @@ EncodedEventPtr make_event(EventKind k, std::string topic, std::string json, boo
   e->retained = retained;
   return e;
 }
-
-// A FILE* whose text the test can read (the publisher's log).
-struct MemoryLog {
-  MemoryLog() : file(open_memstream(&buf, &len)) {}
-  ~MemoryLog() {
-    std::fclose(file);
-    std::free(buf);
-  }
-  MemoryLog(const MemoryLog&) = delete;
-  MemoryLog& operator=(const MemoryLog&) = delete;
-  std::string text() {
-    std::fflush(file);
-    return std::string(buf, len);
-  }
-  char* buf = nullptr;
-  std::size_t len = 0;
-  std::FILE* file;
-};
 
 class MqttPublisherTest : public ::testing::Test {
  protected:
