@@ -43,8 +43,8 @@ struct GatewayRun {
 
   boost::asio::io_context io;
   Logger log{LogLevel::Error};
+  std::vector<std::uint64_t> seqs;  // network 1, in order; outlives app (its stop() still emits)
   std::unique_ptr<App> app;
-  std::vector<std::uint64_t> seqs;  // network 1, in order
 };
 
 TEST(AppSeq, AfterACleanStopTheSequenceGoesOnWithoutAGap) {
