@@ -69,6 +69,7 @@ void StateCache::apply(std::uint32_t network, const canopen::Event& ev) {
           auto& n = node_ref(net, body.node);
           n.last_seen = ev.timestamp;
           ++n.emcy_count;
+          if (body.error_code != 0) ++n.emcy_error_count;
           n.emcys.push_front(CachedEmcy{body, ev.timestamp, ev.seq});
           if (n.emcys.size() > emcy_history_) n.emcys.pop_back();
         } else if constexpr (std::is_same_v<T, canopen::PdoEvent>) {

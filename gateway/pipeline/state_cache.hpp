@@ -52,7 +52,8 @@ struct NodeInfo {
   std::optional<WallTime> last_seen;
   std::uint32_t boot_count = 0;
   std::optional<Identity> identity;
-  std::uint64_t emcy_count = 0;
+  std::uint64_t emcy_count = 0;        // every EMCY, resets included
+  std::uint64_t emcy_error_count = 0;  // EMCYs reporting an error (code not 0000h "error reset or no error")
   std::deque<CachedEmcy> emcys;  // newest first, bounded
   std::map<std::pair<std::uint16_t, std::uint8_t>, CachedValue> values;
   std::map<std::uint16_t, canopen::Bytes> tpdo_raw;  // latest raw bytes per TPDO number

@@ -146,6 +146,14 @@ TEST(StateCache, KeepsLatestValuesAndBoundedEmcyHistoryNewestFirst) {
   ASSERT_EQ(n->emcys.size(), 3U);
   EXPECT_EQ(n->emcys.front().emcy.error_code, 5);  // newest first
   EXPECT_EQ(n->emcys.back().emcy.error_code, 3);
+  // An EMCY with code 0000h says "error reset or no error" (CiA 301
+  // 7.2.7.1): it is an EMCY, but no error.
+  canopen::EmcyEvent reset;
+  reset.node = 5;
+  cache.apply(1, event(16, reset));
+  EXPECT_EQ(n->emcy_count, 6U);
+  EXPECT_EQ(n->emcy_error_count, 5U);
+  EXPECT_EQ(n->emcys.front().emcy.error_code, 0);
   // Unclaimed PDOs belong to no node.
   canopen::PdoEvent unclaimed;
   unclaimed.cob_id = 0x1A5;
