@@ -111,6 +111,17 @@ std::string state_name(const NodeInfo& n) {
   return std::string(canopen::to_string(*n.state));
 }
 
+json::object emcy_json(const CachedEmcy& e) {
+  json::object j;
+  j["seq"] = e.seq;
+  j["timestamp"] = timestamp_text(e.timestamp);
+  j["errorCode"] = e.emcy.error_code;
+  j["errorRegister"] = e.emcy.error_register;
+  j["manufacturerData"] = hex_text(e.emcy.manufacturer);
+  j["description"] = e.emcy.description;
+  return j;
+}
+
 json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, WallTime now) {
   json::object o;
   o["node"] = n.id;
@@ -138,6 +149,7 @@ json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, 
   }
   o["emcyCount"] = n.emcy_count;
   o["emcyErrorCount"] = n.emcy_error_count;
+  o["lastEmcy"] = n.last_emcy ? json::value(emcy_json(*n.last_emcy)) : json::value(nullptr);
   o["eds"] = app.description(net, n.id) != nullptr;
   return o;
 }
@@ -318,16 +330,7 @@ void get_emcy(App& app, const Request& req, Responder respond) {
   if (const auto* n = app.cache().node(net, node)) {
     count = n->emcy_count;
     errors = n->emcy_error_count;
-    for (const auto& e : n->emcys) {
-      json::object j;
-      j["seq"] = e.seq;
-      j["timestamp"] = timestamp_text(e.timestamp);
-      j["errorCode"] = e.emcy.error_code;
-      j["errorRegister"] = e.emcy.error_register;
-      j["manufacturerData"] = hex_text(e.emcy.manufacturer);
-      j["description"] = e.emcy.description;
-      list.push_back(std::move(j));
-    }
+    for (const auto& e : n->emcys) list.push_back(emcy_json(e));
   }
   json::object o;
   o["network"] = net;

@@ -79,6 +79,7 @@ TEST(Rest, NodesAndOneNodeWithTpdoValues) {
     ASSERT_TRUE(n.at("identity").is_object()) << json::serialize(n);
     EXPECT_EQ(n.at("identity").as_object().at("deviceType").to_number<std::uint32_t>(), 0x00020192U);
     EXPECT_TRUE(n.contains("emcyCount"));
+    EXPECT_TRUE(n.at("lastEmcy").is_null()) << "no EMCY since the boot-up";
   }
   EXPECT_TRUE(saw5);
 
@@ -329,6 +330,16 @@ TEST(Rest, EmcyListNewestFirst) {
   EXPECT_LT(error_count, o.at("emcyCount").to_number<std::uint64_t>()) << "a reset is no error";
   if (o.at("emcyCount").to_number<std::size_t>() == list.size()) {
     EXPECT_EQ(error_count, static_cast<std::uint64_t>(errors)) << e.body;
+  }
+  // The node list has the newest one as the node's last EMCY (or a newer one).
+  auto nodes = rig.request("GET", "/api/v1/networks/1/nodes");
+  for (const auto& v : nodes.json().as_object().at("nodes").as_array()) {
+    const auto& n = v.as_object();
+    if (n.at("node").to_number<int>() != 5) continue;
+    ASSERT_TRUE(n.at("lastEmcy").is_object()) << nodes.body;
+    EXPECT_GE(n.at("lastEmcy").as_object().at("seq").to_number<std::uint64_t>(),
+              list[0].as_object().at("seq").to_number<std::uint64_t>());
+    EXPECT_TRUE(n.at("lastEmcy").as_object().contains("errorRegister"));
   }
   const auto& first = o.at("emcy").as_array()[0].as_object();
   EXPECT_THAT(std::string(first.at("timestamp").as_string()), HasSubstr("Z"));
