@@ -486,7 +486,7 @@ function onEvent(msg) {
     case 'heartbeat': touchNode(ev.node, { state: ev.state, hbAt: Date.now() }); break;
     case 'state':
       // A boot-up starts without the errors the node had (as lastEmcy on the gateway).
-      touchNode(ev.node, ev.state === 'initialising' ? { state: ev.state, lastEmcy: null } : { state: ev.state });
+      touchNode(ev.node, ev.cause === 'boot-up' ? { state: ev.state, lastEmcy: null } : { state: ev.state });
       break;
     case 'emcy': {
       const n = touchNode(ev.node, {});
