@@ -18,6 +18,8 @@ const state = {
   networks: [],
   gateway: null,
   gatewayLoadedAt: 0,
+  ownId: null,            // the gateway's own node-ID on this network (GET /networks/{net} nodeId)
+  ownState: null,         // its NMT state (nodeState)
   nodes: new Map(),       // node-ID -> summary (+ hbAt: client time of the last heartbeat)
   values: new Map(),      // node-ID -> Map("index:sub" -> latest mapped value)
   history: new Map(),     // "node/index:sub" -> {t: [], v: []}
@@ -281,6 +283,8 @@ async function loadGateway() {
   state.gatewayLoadedAt = performance.now();
   state.networks = gw.networks || [];
   if (!state.networks.some((n) => n.network === state.net) && state.networks.length) state.net = state.networks[0].network;
+  const net = state.networks.find((n) => n.network === state.net);
+  state.ownId = net && net.nodeId !== undefined ? net.nodeId : gw.nodeId ?? null;
   $('#gw-id').textContent = gw.gatewayId || '';
   const sel = $('#net-select');
   sel.replaceChildren(...state.networks.map((n) =>
@@ -292,6 +296,13 @@ async function loadGateway() {
 async function loadNetwork() {
   const n = await api('GET', `/networks/${state.net}`);
   setBus(n.bus || 'unknown', n.lastBusEvent);
+  state.ownId = n.nodeId;
+  state.ownState = n.nodeState || null;
+  const own = state.nodes.get(n.nodeId);
+  if (own && own.own && state.ownState && own.state !== state.ownState) {
+    own.state = state.ownState;
+    state.dirty.nodes = true;
+  }
   const facts = [
     `${n.simulated ? 'simulated' : n.interface}`,
     n.bitrate ? `${n.bitrate / 1000} kbit/s` : null,
@@ -312,9 +323,21 @@ async function loadNodes() {
     const prev = state.nodes.get(n.node);
     state.nodes.set(n.node, {
       ...n,
+      own: n.node === state.ownId,
+      state: n.node === state.ownId && state.ownState ? state.ownState : n.state,
       hbAt: n.lastHeartbeatAgeMs === null || n.lastHeartbeatAgeMs === undefined ? (prev ? prev.hbAt : null)
                                                                                : now - n.lastHeartbeatAgeMs,
     });
+  }
+  // The gateway's own node is on the bus too, but the gateway does not hear
+  // itself: it is listed only once it sent an EMCY. Shown always, so its
+  // dictionary is one click away.
+  if (state.ownId !== null && !seen.has(state.ownId)) {
+    state.nodes.set(state.ownId, {
+      node: state.ownId, name: '', configured: true, state: state.ownState || 'unknown', hbAt: null,
+      emcyCount: 0, emcyErrorCount: 0, lastEmcy: null, identity: null, eds: true, own: true, listed: false,
+    });
+    seen.add(state.ownId);
   }
   for (const id of [...state.nodes.keys()]) if (!seen.has(id)) state.nodes.delete(id);
   state.dirty.nodes = true;
@@ -322,8 +345,10 @@ async function loadNodes() {
   // empty; a few at a time so a large network stays under the rate limit.
   await inBatches([...state.nodes.keys()], 4, async (id) => {
     try {
+      // The own node before it is listed has no node resource (404).
+      const unlisted = state.nodes.get(id)?.listed === false;
       const [node, emcy] = await Promise.all([
-        api('GET', `/networks/${state.net}/nodes/${id}`),
+        unlisted ? { values: [] } : api('GET', `/networks/${state.net}/nodes/${id}`),
         api('GET', `/networks/${state.net}/nodes/${id}/emcy`),
       ]);
       const m = valuesOf(id);
@@ -459,10 +484,15 @@ function onEvent(msg) {
   switch (msg.kind) {
     case 'tpdo': onTpdo(ev); break;
     case 'heartbeat': touchNode(ev.node, { state: ev.state, hbAt: Date.now() }); break;
-    case 'state': touchNode(ev.node, { state: ev.state }); break;
+    case 'state':
+      // A boot-up starts without the errors the node had (as lastEmcy on the gateway).
+      touchNode(ev.node, ev.cause === 'boot-up' ? { state: ev.state, lastEmcy: null } : { state: ev.state });
+      break;
     case 'emcy': {
       const n = touchNode(ev.node, {});
       n.emcyCount = (n.emcyCount || 0) + 1;
+      if (ev.errorCode !== 0) n.emcyErrorCount = (n.emcyErrorCount || 0) + 1;
+      if (!n.lastEmcy || !(n.lastEmcy.seq >= ev.seq)) n.lastEmcy = ev;
       addEmcy(ev, true);
       break;
     }
@@ -478,7 +508,8 @@ function touchNode(id, patch) {
   let n = state.nodes.get(id);
   if (!n) {
     // A node heard for the first time: show it now, details on the next snapshot.
-    n = { node: id, name: '', configured: false, state: 'unknown', hbAt: null, emcyCount: 0, identity: null, eds: false };
+    n = { node: id, name: '', configured: false, state: 'unknown', hbAt: null, emcyCount: 0, emcyErrorCount: 0,
+          lastEmcy: null, identity: null, eds: false };
     state.nodes.set(id, n);
     scheduleNodeRefresh();
   }
@@ -540,19 +571,28 @@ function renderMeta(status) {
   $('#gw-meta').textContent = `v${gw.version} · up ${fmtDuration(up)}`;
 }
 
-const BUS_CLASS = {
-  'error-active': 'ok', 'error-warning': 'warn', 'error-passive': 'warn', 'bus-off': 'bad', down: 'bad',
+// CAN controller states (ISO 11898-1): "error-active" is the normal one,
+// whatever its name suggests, so it reads "ok"; the others say what they are.
+const BUS = {
+  'error-active': { level: 'ok', text: 'ok', hint: 'error-active: the normal state, the controller takes part in all bus traffic' },
+  'error-warning': { level: 'warn', text: 'error-warning', hint: 'error counters above 96: errors on the bus (bit rate, termination, wiring?)' },
+  'error-passive': { level: 'warn', text: 'error-passive', hint: 'error counters above 127: frequent errors; check bit rate, termination and wiring' },
+  'bus-off': { level: 'bad', text: 'bus-off', hint: 'the controller left the bus after too many errors; nothing is sent or received' },
+  down: { level: 'bad', text: 'down', hint: 'the CAN interface is down' },
 };
 function setBus(s, ev) {
   const p = $('#bus-state');
+  const b = BUS[s] || { level: 'unknown', text: s, hint: '' };
   p.dataset.state = s;
-  p.dataset.level = BUS_CLASS[s] || 'unknown';
-  p.textContent = `bus: ${s}`;
+  p.dataset.level = b.level;
+  p.textContent = `bus: ${b.text}`;
+  let title = `CAN bus state ${b.hint || s}`;
   if (ev) {
     const tec = ev.tec ?? ev.txErrorCounter, rec = ev.rec ?? ev.rxErrorCounter;
-    p.title = `CAN bus state${ev.cause ? ` (${ev.cause})` : ''}` +
+    title += (ev.cause ? ` (last change: ${ev.cause})` : '') +
       (tec !== undefined ? ` · TEC ${tec} REC ${rec}` : '') + (ev.dropped ? ` · ${ev.dropped} frames dropped` : '');
   }
+  p.title = title;
 }
 
 // ---------------------------------------------------------------- rendering: nodes table
@@ -567,6 +607,26 @@ function identityText(id) {
           `rev 0x${hex(id.revision, 8)}`, id.serial ? `serial ${id.serial}` : null].filter(Boolean).join(' · ');
 }
 
+// The node's active error, from its last EMCY since boot-up: an error code
+// other than 0000h, or a reset (0000h) whose error register (1001h) says
+// other errors remain. null: no error known.
+function activeError(n) {
+  const e = n && n.lastEmcy;
+  if (!e || (e.errorCode === 0 && !e.errorRegister)) return null;
+  return e;
+}
+
+function errorText(e) {
+  const reg = `error register ${hex(e.errorRegister, 2)}h`;
+  if (e.errorCode === 0) return `${reg}: errors remain after the last EMCY reset`;
+  return `EMCY ${hex(e.errorCode, 4)}h${e.description ? ' ' + e.description : ''} · ${reg}`;
+}
+
+function nodeName(n) {
+  if (n.own) return n.name || 'this gateway';
+  return n.name || (n.configured ? '' : 'not configured');
+}
+
 function renderNodes() {
   const body = $('#nodes-body');
   const ids = [...state.nodes.keys()].sort((a, b) => a - b);
@@ -579,7 +639,9 @@ function renderNodes() {
     body.replaceChildren(...ids.map((id) => el('tr', { 'data-node': id, tabindex: 0 },
       el('td', { class: 'num mono', 'data-field': 'id', text: id }),
       el('td', { 'data-field': 'name' }),
-      el('td', {}, el('span', { class: 'pill state', 'data-field': 'state' })),
+      el('td', { class: 'col-state' }, el('span', { class: 'pills' },
+        el('span', { class: 'pill state', 'data-field': 'state' }),
+        el('span', { class: 'pill', 'data-field': 'error', 'data-level': 'bad', text: 'error', hidden: true }))),
       el('td', { class: 'num mono', 'data-field': 'hb-age' }),
       el('td', { class: 'num mono', 'data-field': 'emcy' }),
       el('td', { class: 'col-ident small muted', 'data-field': 'identity' }))));
@@ -588,15 +650,26 @@ function renderNodes() {
     const n = state.nodes.get(id);
     const row = body.querySelector(`tr[data-node="${id}"]`);
     row.classList.toggle('selected', id === state.selected);
-    setText(row.querySelector('[data-field=name]'), n.name || (n.configured ? '' : 'not configured'));
+    row.classList.toggle('own', !!n.own);
+    setText(row.querySelector('[data-field=name]'), nodeName(n));
     const st = row.querySelector('[data-field=state]');
     setText(st, n.state);
     st.dataset.state = n.state;
-    setText(row.querySelector('[data-field=emcy]'), n.emcyCount ?? 0);
-    row.querySelector('[data-field=emcy]').classList.toggle('has-emcy', (n.emcyCount || 0) > 0);
+    const err = activeError(n);
+    const errPill = row.querySelector('[data-field=error]');
+    errPill.hidden = !err;
+    errPill.title = err ? errorText(err) : '';
+    row.dataset.error = err ? '1' : '0';
+    // Errors only: an EMCY with code 0000h reports that errors were reset.
+    const errors = n.emcyErrorCount ?? 0;
+    const count = row.querySelector('[data-field=emcy]');
+    setText(count, errors);
+    count.classList.toggle('has-emcy', errors > 0);
+    count.title = `${errors} EMCY error${errors === 1 ? '' : 's'} and ${Math.max(0, (n.emcyCount ?? 0) - errors)} reset(s) since start`;
     const ident = row.querySelector('[data-field=identity]');
-    setText(ident, identityText(n.identity) || '–');
-    ident.title = identityText(n.identity) || '';  // the whole text, where the cell cuts it short
+    const identText = n.own ? ownIdentityText() : identityText(n.identity);
+    setText(ident, identText || '–');
+    ident.title = identText || '';  // the whole text, where the cell cuts it short
   }
   $('#nodes').classList.toggle('no-ident', ids.every((id) => !state.nodes.get(id).identity));
   renderAges();
@@ -636,14 +709,25 @@ function selectNode(id) {
   renderOd(id);
 }
 
+function ownIdentityText() {
+  const gw = state.gateway;
+  return `the gateway's own node · canopen-gateway${gw && gw.version ? ' v' + gw.version : ''}`;
+}
+
 function renderNodeHeader() {
   const n = state.nodes.get(state.selected);
   if (!n) return;
-  setText($('#node-title'), `Node ${n.node}${n.name ? ' · ' + n.name : ''}`);
+  const name = nodeName(n);
+  setText($('#node-title'), `Node ${n.node}${name ? ' · ' + name : ''}`);
   const st = $('#node-state');
   setText(st, n.state);
   st.dataset.state = n.state;
-  setText($('#node-ident'), identityText(n.identity) || (n.eds ? '' : 'no EDS configured: values are shown raw'));
+  const err = activeError(n);
+  $('#node-error').hidden = !err;
+  setText($('#node-error-text'), err ? errorText(err) : '');
+  $('#node-error-text').hidden = !err;
+  setText($('#node-ident'), n.own ? ownIdentityText()
+                                  : identityText(n.identity) || (n.eds ? '' : 'no EDS configured: values are shown raw'));
 }
 
 const charts = new Map(); // "index:sub" -> uPlot of the selected node
@@ -681,7 +765,10 @@ function renderValues() {
   if (state.dirty.valueLayout) {
     destroyCharts();
     if (!keys.length) {
-      box.replaceChildren(el('div', { class: 'muted', text: 'No TPDO received from this node yet (is it operational?).' }));
+      box.replaceChildren(el('div', { class: 'muted', text: state.nodes.get(id)?.own
+        ? 'The gateway\'s own node sends no process data of its own. Its object dictionary is below; ' +
+          'reads and writes there are answered by the gateway itself, not over the bus.'
+        : 'No TPDO received from this node yet (is it operational?).' }));
     } else {
       box.replaceChildren(...keys.map((k) => {
         const v = m.get(k);
@@ -785,8 +872,11 @@ async function renderOd(id) {
     }
     if (state.selected !== id) return;
   }
-  info.textContent = `Node ${id}: ${[od.vendorName, od.productName].filter(Boolean).join(' · ')}` +
-    `${od.dcf ? ' (DCF)' : ' (EDS)'} · ${od.objects.length} objects`;
+  info.textContent = od.gateway
+    ? `Node ${id}: the gateway's own node · ${od.productName || 'canopen-gateway'} (built-in dictionary) · ${od.objects.length} objects`
+    : `Node ${id}: ${[od.vendorName, od.productName].filter(Boolean).join(' · ')}` +
+      `${od.dcf ? ' (DCF)' : ' (EDS)'} · ${od.objects.length} objects`;
+  $('#panel-od').dataset.gateway = od.gateway ? '1' : '0';
   const rows = [];
   for (const o of od.objects) {
     const single = o.objectCode === 'VAR' && o.subs.length === 1 && o.subs[0].subIndex === 0;
@@ -873,12 +963,47 @@ async function sdoAction(row, action) {
 
 const NMT_TEXT = { start: 'Start', stop: 'Stop', preop: 'Pre-operational', 'reset-node': 'Reset node', 'reset-comm': 'Reset communication' };
 
+// Every command that takes nodes out of operation asks first: on a machine,
+// a stopped drive or I/O rack stops the process (CiA 301 7.3.2.2.1). Start
+// does not: it is what a node waits for.
+const NMT_CONFIRM = {
+  stop: { title: (who) => `Stop ${who}?`,
+          text: 'A stopped node sends and takes no process data (PDO) and answers no SDO request until it is started again.' },
+  preop: { title: (who) => `Switch ${who} to pre-operational?`,
+           text: 'A pre-operational node sends and takes no process data (PDO); SDO access stays.' },
+  'reset-node': { title: (who) => `Reset ${who}?`,
+                  text: 'The node restarts its application: its parameters return to their power-on values, ' +
+                        'and it boots again into pre-operational (no process data until started).' },
+  'reset-comm': { title: (who) => `Reset the communication of ${who}?`,
+                  text: 'The node resets its communication parameters and boots again into pre-operational ' +
+                        '(no process data until started).' },
+};
+
+function confirmDialog(title, message, okText) {
+  const d = $('#confirm');
+  setText($('#confirm-title'), title);
+  setText($('#confirm-message'), message);
+  setText($('#confirm-ok'), okText);
+  d.returnValue = '';
+  d.showModal();
+  $('#confirm-cancel').focus(); // Enter on an unexpected dialog must not stop a machine
+  return new Promise((resolve) => d.addEventListener('close', () => resolve(d.returnValue === 'ok'), { once: true }));
+}
+
 async function nmt(node, command) {
-  const who = node === 0 ? 'all nodes' : `node ${node}`;
-  if (command.startsWith('reset') && !window.confirm(`${NMT_TEXT[command]} on ${who}?`)) return;
+  const n = state.nodes.get(node);
+  const name = n ? nodeName(n) : '';
+  const who = node === 0 ? 'all nodes' : `node ${node}${name ? ` (${name})` : ''}`;
+  const ask = NMT_CONFIRM[command];
+  if (ask) {
+    const all = node === 0 ? ` The command goes to every node on network ${state.net}, the gateway's own node included.` : '';
+    if (!await confirmDialog(ask.title(who), ask.text + all, NMT_TEXT[command])) return;
+  }
   try {
     await api('POST', `/networks/${state.net}/nodes/${node}/nmt`, { command });
     toast(`NMT ${NMT_TEXT[command]} sent to ${who}`, 'ok');
+    // The own node's state comes with the network, not as an event.
+    if (node === 0 || node === state.ownId) setTimeout(() => loadNetwork().catch(() => {}), 300);
   } catch (e) {
     toast(describeError(e), 'error');
   }

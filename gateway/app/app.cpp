@@ -361,6 +361,13 @@ const canopen::od::ObjectDictionary* App::own_dictionary(std::uint32_t net_numbe
   return od ? &*od : nullptr;
 }
 
+std::optional<canopen::NmtState> App::own_state(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
+  const auto& own = nets_[net_number - 1]->own;
+  if (!own) return std::nullopt;
+  return own->state();
+}
+
 std::optional<canopen::can::BusState> App::bus_state(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
   return nets_[net_number - 1]->channel->state();

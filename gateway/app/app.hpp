@@ -121,6 +121,9 @@ class App {
   // parameters as they are now: SDO writes and NMT resets change them);
   // nullptr for an unknown network.
   const canopen::od::ObjectDictionary* own_dictionary(std::uint32_t net) const;
+  // The NMT state of the gateway's own node on network `net` (NMT commands
+  // to all nodes or to its node-ID change it); nullopt for an unknown network.
+  std::optional<canopen::NmtState> own_state(std::uint32_t net) const;
   // The bus state of network `net` as its channel reports it now; nullopt
   // for an unknown network.
   std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const;

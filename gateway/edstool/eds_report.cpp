@@ -61,8 +61,13 @@ json::object dictionary_json(const canopen::eds::DeviceDescription& d) {
   o["vendorName"] = d.device.vendor_name;
   o["productName"] = d.device.product_name;
   o["dcf"] = d.is_dcf;
+  o["objects"] = objects_json(d.od);
+  return o;
+}
+
+json::array objects_json(const canopen::od::ObjectDictionary& od) {
   json::array objects;
-  for (const auto& [index, obj] : d.od.objects()) {
+  for (const auto& [index, obj] : od.objects()) {
     json::object jo;
     jo["index"] = index;
     jo["indexHex"] = index_hex(index);
@@ -84,8 +89,7 @@ json::object dictionary_json(const canopen::eds::DeviceDescription& d) {
     jo["subs"] = std::move(subs);
     objects.push_back(std::move(jo));
   }
-  o["objects"] = std::move(objects);
-  return o;
+  return objects;
 }
 
 }  // namespace gateway::edstool

@@ -5,11 +5,14 @@
 //    (../shared/api-contract.md: "FILE: ok", "FILE: ok, N warnings" then
 //    "FILE:LINE: warning: reason", or "FILE:LINE: error: reason");
 //  - dictionary_json(): the object dictionary in the shape of
-//    GET /api/v1/networks/{net}/nodes/{node}/od (without network and node).
+//    GET /api/v1/networks/{net}/nodes/{node}/od (without network and node);
+//    objects_json() its "objects" part for any dictionary (the gateway's
+//    own node has no file).
 //
 // Pure functions, thread-safe.
 #pragma once
 
+#include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
 #include <cstdint>
 #include <filesystem>
@@ -44,5 +47,7 @@ std::string error_line(const canopen::eds::EdsError& e);
 // "name", "objectCode", "subs": [{"subIndex", "name", "type", "access",
 // "pdoMappable", "default", "low", "high"}]}]}
 boost::json::object dictionary_json(const canopen::eds::DeviceDescription& d);
+// The "objects" array of dictionary_json() for `od`, in index order.
+boost::json::array objects_json(const canopen::od::ObjectDictionary& od);
 
 }  // namespace gateway::edstool

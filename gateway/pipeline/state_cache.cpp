@@ -59,7 +59,10 @@ void StateCache::apply(std::uint32_t network, const canopen::Event& ev) {
           n.state = body.state;
           n.lost = body.cause == canopen::NodeStateEvent::Cause::Lost;
           if (!n.lost) n.last_seen = ev.timestamp;
-          if (body.cause == canopen::NodeStateEvent::Cause::BootUp) ++n.boot_count;
+          if (body.cause == canopen::NodeStateEvent::Cause::BootUp) {
+            ++n.boot_count;
+            n.last_emcy.reset();
+          }
         } else if constexpr (std::is_same_v<T, canopen::HeartbeatEvent>) {
           auto& n = node_ref(net, body.node);
           n.last_heartbeat = ev.timestamp;
@@ -69,7 +72,9 @@ void StateCache::apply(std::uint32_t network, const canopen::Event& ev) {
           auto& n = node_ref(net, body.node);
           n.last_seen = ev.timestamp;
           ++n.emcy_count;
+          if (body.error_code != 0) ++n.emcy_error_count;
           n.emcys.push_front(CachedEmcy{body, ev.timestamp, ev.seq});
+          n.last_emcy = n.emcys.front();
           if (n.emcys.size() > emcy_history_) n.emcys.pop_back();
         } else if constexpr (std::is_same_v<T, canopen::PdoEvent>) {
           if (body.node == 0) return;  // unclaimed: nobody to attach it to

@@ -52,8 +52,13 @@ struct NodeInfo {
   std::optional<WallTime> last_seen;
   std::uint32_t boot_count = 0;
   std::optional<Identity> identity;
-  std::uint64_t emcy_count = 0;
+  std::uint64_t emcy_count = 0;        // every EMCY, resets included
+  std::uint64_t emcy_error_count = 0;  // EMCYs reporting an error (code not 0000h "error reset or no error")
   std::deque<CachedEmcy> emcys;  // newest first, bounded
+  // The last EMCY since the node's last boot-up (a boot-up clears it: the
+  // device starts without the errors it had). An error is active while its
+  // code is not 0000h or its error register (1001h) is not 0.
+  std::optional<CachedEmcy> last_emcy;
   std::map<std::pair<std::uint16_t, std::uint8_t>, CachedValue> values;
   std::map<std::uint16_t, canopen::Bytes> tpdo_raw;  // latest raw bytes per TPDO number
   std::optional<canopen::BootConfigEvent> boot;      // last boot-configuration step

@@ -111,6 +111,17 @@ std::string state_name(const NodeInfo& n) {
   return std::string(canopen::to_string(*n.state));
 }
 
+json::object emcy_json(const CachedEmcy& e) {
+  json::object j;
+  j["seq"] = e.seq;
+  j["timestamp"] = timestamp_text(e.timestamp);
+  j["errorCode"] = e.emcy.error_code;
+  j["errorRegister"] = e.emcy.error_register;
+  j["manufacturerData"] = hex_text(e.emcy.manufacturer);
+  j["description"] = e.emcy.description;
+  return j;
+}
+
 json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, WallTime now) {
   json::object o;
   o["node"] = n.id;
@@ -137,6 +148,8 @@ json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, 
     o["identity"] = nullptr;
   }
   o["emcyCount"] = n.emcy_count;
+  o["emcyErrorCount"] = n.emcy_error_count;
+  o["lastEmcy"] = n.last_emcy ? json::value(emcy_json(*n.last_emcy)) : json::value(nullptr);
   o["eds"] = app.description(net, n.id) != nullptr;
   return o;
 }
@@ -181,6 +194,7 @@ void get_network(App& app, const Request& req, Responder respond) {
   o["interface"] = cfg.simulated ? std::string("demo") : cfg.interface;
   o["simulated"] = cfg.simulated;
   o["nodeId"] = cfg.node_id;
+  if (auto s = app.own_state(net)) o["nodeState"] = std::string(canopen::to_string(*s));
   if (cfg.bitrate != 0) o["bitrate"] = cfg.bitrate;
   if (auto s = app.bus_state(net)) o["bus"] = std::string(canopen::can::to_string(*s));
   const auto* info = app.cache().network(net);
@@ -279,14 +293,29 @@ void get_od(App& app, const Request& req, Responder respond) {
   std::uint8_t node = 0;
   if (auto err = check_net(app, req, net)) return respond(std::move(*err));
   if (auto err = check_node(req, node, false)) return respond(std::move(*err));
+  json::object o;
+  o["network"] = net;
+  o["node"] = node;
+  if (node == app.config().networks[net - 1].node_id) {
+    // The gateway's own node has no EDS: its built-in dictionary is what
+    // SDO requests to its node-ID read and write.
+    const auto* own = app.own_dictionary(net);
+    if (own == nullptr) return respond(problem_response(404, "network " + std::to_string(net) + " has no own node"));
+    const auto name = own->get(0x1008, 0);
+    o["vendorName"] = "";
+    o["productName"] = name && std::holds_alternative<std::string>(name->data) ? std::get<std::string>(name->data)
+                                                                                 : std::string("canopen-gateway");
+    o["dcf"] = false;
+    o["gateway"] = true;
+    o["objects"] = gateway::edstool::objects_json(*own);
+    return respond(json_response(o));
+  }
   const auto* desc = app.description(net, node);
   if (desc == nullptr)
     return respond(problem_response(404, "node " + std::to_string(node) + " on network " + std::to_string(net) +
                                              " has no EDS/DCF configured"));
-  json::object o;
-  o["network"] = net;
-  o["node"] = node;
   for (auto& [key, value] : gateway::edstool::dictionary_json(*desc)) o[key] = std::move(value);
+  o["gateway"] = false;
   respond(json_response(o));
 }
 
@@ -297,23 +326,17 @@ void get_emcy(App& app, const Request& req, Responder respond) {
   if (auto err = check_node(req, node, false)) return respond(std::move(*err));
   json::array list;
   std::uint64_t count = 0;
+  std::uint64_t errors = 0;
   if (const auto* n = app.cache().node(net, node)) {
     count = n->emcy_count;
-    for (const auto& e : n->emcys) {
-      json::object j;
-      j["seq"] = e.seq;
-      j["timestamp"] = timestamp_text(e.timestamp);
-      j["errorCode"] = e.emcy.error_code;
-      j["errorRegister"] = e.emcy.error_register;
-      j["manufacturerData"] = hex_text(e.emcy.manufacturer);
-      j["description"] = e.emcy.description;
-      list.push_back(std::move(j));
-    }
+    errors = n->emcy_error_count;
+    for (const auto& e : n->emcys) list.push_back(emcy_json(e));
   }
   json::object o;
   o["network"] = net;
   o["node"] = node;
   o["emcyCount"] = count;
+  o["emcyErrorCount"] = errors;
   o["emcy"] = std::move(list);
   respond(json_response(o));
 }

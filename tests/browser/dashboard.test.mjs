@@ -192,6 +192,35 @@ async function nodeState(page, node) {
   return page.textContent(`#nodes-body tr[data-node="${node}"] [data-field=state]`);
 }
 
+async function getJson(base, p) {
+  const r = await fetch(`${base}/api/v1${p}`);
+  if (!r.ok) throw new Error(`GET ${p}: ${r.status}`);
+  return r.json();
+}
+
+// The error pill of a node's row: shown, and the row's data-error, or not.
+async function rowError(page, node) {
+  return page.$eval(`#nodes-body tr[data-node="${node}"]`, (r) => ({
+    flag: r.dataset.error, shown: !r.querySelector('[data-field=error]').hidden,
+    title: r.querySelector('[data-field=error]').title, count: r.querySelector('[data-field=emcy]').textContent }));
+}
+
+// NMT POSTs the page sent (their bodies), to see that a cancelled command sent nothing.
+function watchNmt(page) {
+  const sent = [];
+  page.on('request', (r) => { if (r.method() === 'POST' && /\/nmt$/.test(new URL(r.url()).pathname)) sent.push(r.postData()); });
+  return sent;
+}
+
+async function nmtButton(page, selector, answer) {
+  await page.click(selector);
+  await page.waitForSelector('#confirm[open]');
+  const text = await page.textContent('#confirm');
+  await page.click(answer === 'ok' ? '#confirm-ok' : '#confirm-cancel');
+  await page.waitForSelector('#confirm:not([open])', { state: 'attached' });
+  return text;
+}
+
 // ---------------------------------------------------------------- part 1: demo, no auth
 
 async function partDemo() {
@@ -216,6 +245,36 @@ async function partDemo() {
   check(true, 'node 5 is shown operational');
   const bus = await page.getAttribute('#bus-state', 'data-state');
   check(bus === 'error-active', `bus state shown as error-active (got ${bus})`);
+  // error-active is the CAN controller's normal state: it must look healthy,
+  // like an operational node, not like an alarm.
+  const busLook = await page.evaluate(() => {
+    const p = document.querySelector('#bus-state');
+    const op = document.querySelector('#nodes-body tr[data-node="5"] [data-field=state]');
+    return { level: p.dataset.level, text: p.textContent, title: p.title,
+             bg: getComputedStyle(p).backgroundColor, okBg: getComputedStyle(op).backgroundColor };
+  });
+  check(busLook.level === 'ok' && busLook.bg === busLook.okBg && !/error/.test(busLook.text) && /error-active/.test(busLook.title),
+    `bus error-active styled healthy: "${busLook.text}", ${busLook.bg} as an operational node (${busLook.okBg}); title "${busLook.title}"`);
+
+  // The gateway's own node is listed and shows its own dictionary.
+  const own = (await getJson(base, '/gateway')).nodeId;
+  const ownNet = await getJson(base, '/networks/1');
+  await page.waitForSelector(`#nodes-body tr[data-node="${own}"]`);
+  await page.waitForFunction((id) => document.querySelector(`#nodes-body tr[data-node="${id}"] [data-field=state]`)
+    ?.textContent !== 'unknown', own);
+  check((await nodeState(page, own)) === ownNet.nodeState,
+    `the gateway's own node ${own} is listed, ${await nodeState(page, own)} as GET /networks/1 says (${ownNet.nodeState})`);
+  await selectNode(page, own);
+  await page.waitForSelector(`#panel-od[data-node="${own}"][data-gateway="1"]`);
+  await page.waitForSelector('#od-body tr[data-od="1017:0"]');
+  const ownInfo = await page.textContent('#od-info');
+  check(/own node/.test(ownInfo) && !/EDS/.test(ownInfo), `node ${own}: its built-in dictionary is shown (${ownInfo})`);
+  await page.fill('#od-filter', '1008');
+  await page.click('#od-body tr[data-od="1008:0"] button[data-action="read"]');
+  await page.waitForSelector('#od-body tr[data-od="1008:0"][data-status="ok"]');
+  const ownName = await page.textContent('#od-body tr[data-od="1008:0"] [data-field=value]');
+  check(ownName === 'canopen-gateway', `an SDO read of the own node's 1008h answers (${ownName})`);
+  await page.fill('#od-filter', '');
 
   // Live TPDO values: the demo's values move continuously.
   await selectNode(page, 5);
@@ -255,27 +314,87 @@ async function partDemo() {
   check(true, `SDO write of 1017h (${hbTime}) succeeded`);
   await page.fill('#od-filter', '');
 
-  // NMT stop turns the node's shown state to stopped; start brings it back.
+  // NMT stop asks first: cancelled, nothing is sent; confirmed, the node
+  // stops. Start brings it back without asking.
+  const nmtSent = watchNmt(page);
+  const nmtCount = async () => (await getJson(base, '/gateway')).counters.nmtCommands;
+  const commandsBefore = await nmtCount();
   await selectNode(page, 10);
+  const question = await nmtButton(page, '#panel-node button[data-nmt="stop"]', 'cancel');
+  check(/node 10/.test(question), `NMT stop asks for confirmation ("${question.trim().replace(/\s+/g, ' ')}")`);
+  await sleep(500);
+  check(nmtSent.length === 0 && (await nmtCount()) === commandsBefore && (await nodeState(page, 10)) === 'operational',
+    `cancelled: nothing sent (${nmtSent.length} requests, ${await nmtCount() - commandsBefore} NMT commands), node 10 operational`);
   await page.click('#panel-node button[data-nmt="stop"]');
+  await page.waitForSelector('#confirm[open]');
+  await shot(page, 'dashboard-confirm.png', false);
+  await page.click('#confirm-ok');
   await page.waitForFunction(() =>
     document.querySelector('#nodes-body tr[data-node="10"] [data-field=state]')?.textContent === 'stopped');
-  check((await page.textContent('#node-state')) === 'stopped', 'NMT stop: node 10 shown stopped (table and header)');
+  check((await page.textContent('#node-state')) === 'stopped' && nmtSent.length === 1 && /"stop"/.test(nmtSent[0]),
+    'confirmed: NMT stop sent once, node 10 shown stopped (table and header)');
   await page.click('#panel-node button[data-nmt="start"]');
   await page.waitForFunction(() =>
     document.querySelector('#nodes-body tr[data-node="10"] [data-field=state]')?.textContent === 'operational');
-  check(true, 'NMT start: node 10 shown operational again');
+  check(!(await page.isVisible('#confirm')) && nmtSent.length === 2, 'NMT start: sent without asking, node 10 shown operational again');
 
-  // EMCY log: the demo's devices raise one every 20 s.
-  await page.waitForSelector('#emcy-body tr[data-node]', { timeout: 30_000 });
-  const emcy = await page.$eval('#emcy-body tr[data-node]', (r) => ({
+  // Stop for all nodes asks too; Escape cancels.
+  await page.click('#nmt-all button[data-nmt-all="stop"]');
+  await page.waitForSelector('#confirm[open]');
+  check(/all nodes/.test(await page.textContent('#confirm-title')), 'NMT stop-all asks for confirmation');
+  await page.keyboard.press('Escape');
+  await page.waitForSelector('#confirm:not([open])', { state: 'attached' });
+  await sleep(500);
+  check(nmtSent.length === 2 && (await nodeState(page, 5)) === 'operational', 'stop-all cancelled with Escape: nothing sent');
+  await nmtButton(page, '#nmt-all button[data-nmt-all="stop"]', 'ok');
+  await page.waitForFunction(() => [5, 10, 11].every((id) =>
+    document.querySelector(`#nodes-body tr[data-node="${id}"] [data-field=state]`)?.textContent === 'stopped'));
+  await page.waitForFunction((id) =>
+    document.querySelector(`#nodes-body tr[data-node="${id}"] [data-field=state]`)?.textContent === 'stopped', own);
+  check(nmtSent.length === 3, `confirmed stop-all: nodes 5, 10, 11 and the own node ${own} shown stopped`);
+  await page.click('#nmt-all button[data-nmt-all="start"]');
+  await page.waitForFunction((ids) => ids.every((id) =>
+    document.querySelector(`#nodes-body tr[data-node="${id}"] [data-field=state]`)?.textContent === 'operational'),
+  [5, 10, 11, own]);
+  check(true, `start-all (no question): nodes 5, 10, 11 and ${own} operational again`);
+
+  // EMCY log: the demo's devices raise an error every 40 s and reset it
+  // (0000h) 20 s later (gateway/sim/simulator.cpp tick_emcy; the first at 20 s).
+  await selectNode(page, 5);
+  await page.waitForSelector('#emcy-body tr[data-node="5"].emcy-error', { timeout: 30_000 });
+  const emcy = await page.$eval('#emcy-body tr[data-node="5"].emcy-error', (r) => ({
     node: r.dataset.node, code: r.children[2].textContent, description: r.children[4].textContent }));
   check(emcy.description.length > 0, `EMCY shown with its description (node ${emcy.node}, ${emcy.code}: ${emcy.description})`);
-  const count = await page.textContent(`#nodes-body tr[data-node="${emcy.node}"] [data-field=emcy]`);
-  check(Number(count) > 0, `the node's EMCY count is shown (${count})`);
+  // A node with an active EMCY is shown in error (it was green before); if
+  // this one was reset already, the next error comes 20 s later.
+  await page.waitForSelector('#nodes-body tr[data-node="5"][data-error="1"]', { timeout: 45_000 });
+  const raised = await rowError(page, 5);
+  const rest5 = (await getJson(base, '/networks/1/nodes')).nodes.find((n) => n.node === 5);
+  const active = (await page.getAttribute('#emcy-body tr[data-node="5"]', 'data-code'));
+  check(raised.shown && rest5.lastEmcy.errorCode !== 0 && active !== '0000' && raised.title.includes(active),
+    `node 5 with an active EMCY (${active}h) shows "error" (${raised.title})`);
+  check((await page.textContent('#node-state')) === 'operational' && await page.isVisible('#node-error') &&
+        (await page.textContent('#node-error-text')).includes(active),
+    'the node header shows the error beside its NMT state');
+  const errorRows = async () => page.$$eval('#emcy-body tr[data-node="5"].emcy-error', (rows) => rows.length);
+  check(Number(raised.count) === rest5.emcyErrorCount && Number(raised.count) === await errorRows(),
+    `the node's EMCY error count is shown (${raised.count})`);
+  await shot(page, 'dashboard-error.png');
+  // The reset: no error any more, and not counted as one.
+  await page.waitForSelector('#nodes-body tr[data-node="5"][data-error="0"]', { timeout: 30_000 });
+  const cleared = await rowError(page, 5);
+  const after = (await getJson(base, '/networks/1/nodes')).nodes.find((n) => n.node === 5);
+  const resets = await page.$$eval('#emcy-body tr[data-node="5"][data-code="0000"]', (rows) => rows.length);
+  check(!cleared.shown && !(await page.isVisible('#node-error')) && after.lastEmcy.errorCode === 0 &&
+        (await page.getAttribute('#emcy-body tr[data-node="5"]', 'data-code')) === '0000',
+    'after its EMCY reset (0000h) node 5 shows no error');
+  check(resets > 0 && cleared.count === raised.count && after.emcyErrorCount === Number(cleared.count) &&
+        after.emcyCount === after.emcyErrorCount + resets,
+    `the reset is not counted as an error (count stays ${cleared.count}; ${after.emcyCount} EMCYs, ${resets} of them resets)`);
 
   // A stopped node for the picture: the state colours are part of what is checked by eye.
-  await page.click('#panel-node button[data-nmt="stop"]');
+  await selectNode(page, 10);
+  await nmtButton(page, '#panel-node button[data-nmt="stop"]', 'ok');
   await page.waitForFunction(() =>
     document.querySelector('#nodes-body tr[data-node="10"] [data-field=state]')?.textContent === 'stopped');
   await selectNode(page, 5);
@@ -309,6 +428,14 @@ async function partDemo() {
   });
   check(odScroll.scrollWidth <= odScroll.clientWidth + 1,
     `phone: the object dictionary fits its panel (${odScroll.scrollWidth} <= ${odScroll.clientWidth})`);
+  // The node table (with the own node's long name and state) stays inside its panel.
+  const nodesFit = await phone.evaluate(() => {
+    const panel = document.querySelector('#panel-nodes');
+    return { table: document.querySelector('#nodes').getBoundingClientRect().right,
+             inner: panel.getBoundingClientRect().right - parseFloat(getComputedStyle(panel).paddingRight) };
+  });
+  check(nodesFit.table <= nodesFit.inner + 1,
+    `phone: the node table fits its panel (${Math.round(nodesFit.table)} <= ${Math.round(nodesFit.inner)})`);
 
   check(consoleErrors.length === 0, `no errors in the browser console${consoleErrors.length ? ': ' + consoleErrors.join(' | ') : ''}`);
   await ctx.close();
@@ -372,7 +499,7 @@ async function partToken() {
   await page.click('#token-save');
   await page.waitForSelector('#nodes-body tr[data-node="10"]');
   await selectNode(page, 10);
-  await page.click('#panel-node button[data-nmt="stop"]');
+  await nmtButton(page, '#panel-node button[data-nmt="stop"]', 'ok');
   const denied = await page.waitForSelector('.toast[data-kind="error"]');
   const text = await denied.textContent();
   check(/Not permitted/.test(text), `a viewer's NMT stop shows the 403 readably (${text})`);

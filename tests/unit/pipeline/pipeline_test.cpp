@@ -146,11 +146,58 @@ TEST(StateCache, KeepsLatestValuesAndBoundedEmcyHistoryNewestFirst) {
   ASSERT_EQ(n->emcys.size(), 3U);
   EXPECT_EQ(n->emcys.front().emcy.error_code, 5);  // newest first
   EXPECT_EQ(n->emcys.back().emcy.error_code, 3);
+  // An EMCY with code 0000h says "error reset or no error" (CiA 301
+  // 7.2.7.1): it is an EMCY, but no error.
+  canopen::EmcyEvent reset;
+  reset.node = 5;
+  cache.apply(1, event(16, reset));
+  EXPECT_EQ(n->emcy_count, 6U);
+  EXPECT_EQ(n->emcy_error_count, 5U);
+  EXPECT_EQ(n->emcys.front().emcy.error_code, 0);
   // Unclaimed PDOs belong to no node.
   canopen::PdoEvent unclaimed;
   unclaimed.cob_id = 0x1A5;
   cache.apply(1, event(20, unclaimed));
   EXPECT_EQ(cache.node(1, 0), nullptr);
+}
+
+// What the dashboard's "error" status rests on: the last EMCY since the
+// node's boot-up. A reset (0000h) stays the last EMCY, with the error
+// register it reports (other errors may remain); a boot-up forgets it.
+TEST(StateCache, LastEmcySinceBootUp) {
+  StateCache cache;
+  cache.add_network(1, "vcan0", false);
+  using C = canopen::NodeStateEvent::Cause;
+  cache.apply(1, event(1, canopen::NodeStateEvent{5, canopen::NmtState::PreOperational, {}, C::BootUp}));
+  const NodeInfo* n = cache.node(1, 5);
+  ASSERT_NE(n, nullptr);
+  EXPECT_FALSE(n->last_emcy);
+  canopen::EmcyEvent voltage;
+  voltage.node = 5;
+  voltage.error_code = 0x3210;
+  voltage.error_register = 0x05;
+  cache.apply(1, event(2, voltage));
+  ASSERT_TRUE(n->last_emcy);
+  EXPECT_EQ(n->last_emcy->emcy.error_code, 0x3210);
+  EXPECT_EQ(n->last_emcy->seq, 2U);
+  canopen::EmcyEvent reset;
+  reset.node = 5;
+  cache.apply(1, event(3, reset));
+  ASSERT_TRUE(n->last_emcy);
+  EXPECT_EQ(n->last_emcy->emcy.error_code, 0);
+  EXPECT_EQ(n->last_emcy->emcy.error_register, 0);
+  EXPECT_EQ(n->emcy_error_count, 1U);
+  cache.apply(1, event(4, voltage));
+  cache.apply(1, event(5, canopen::NodeStateEvent{5, canopen::NmtState::PreOperational, {}, C::BootUp}));
+  EXPECT_FALSE(n->last_emcy) << "a boot-up starts without the old errors";
+  EXPECT_EQ(n->emcys.size(), 3U) << "the history keeps them";
+  // A heartbeat or a recovery is no boot-up.
+  cache.apply(1, event(6, voltage));
+  cache.apply(1, event(7, canopen::NodeStateEvent{5, std::nullopt, canopen::NmtState::Operational, C::Lost}));
+  cache.apply(1, event(8, canopen::NodeStateEvent{5, canopen::NmtState::Operational, {}, C::Recovered}));
+  cache.apply(1, event(9, canopen::HeartbeatEvent{5, canopen::NmtState::Operational}));
+  ASSERT_TRUE(n->last_emcy);
+  EXPECT_EQ(n->last_emcy->seq, 6U);
 }
 
 TEST(StateCache, BusStateFollowsBusEvents) {

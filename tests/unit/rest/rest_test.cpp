@@ -42,6 +42,15 @@ TEST(Rest, GatewayAndNetwork) {
   ASSERT_TRUE(no.contains("lastBusEvent")) << n.body;
   EXPECT_EQ(no.at("lastBusEvent").as_object().at("state").as_string(), "error-active");
 
+  // The gateway's own node (node-ID 127) after start-up: pre-operational
+  // (CiA 301 7.3.2.2.1) until an NMT start reaches it.
+  EXPECT_EQ(no.at("nodeId").to_number<int>(), 127);
+  EXPECT_EQ(no.at("nodeState").as_string(), "pre-operational") << n.body;
+  ASSERT_EQ(rig.request("POST", "/api/v1/networks/1/nodes/0/nmt", R"({"command": "start"})").status, 200);
+  EXPECT_TRUE(rig.run_until([&] {
+    return rig.request("GET", "/api/v1/networks/1").json().as_object().at("nodeState").as_string() == "operational";
+  }, 2s));
+
   auto missing = rig.request("GET", "/api/v1/networks/9");
   EXPECT_EQ(missing.status, 404);
   EXPECT_EQ(missing.content_type, "application/problem+json");
@@ -70,6 +79,7 @@ TEST(Rest, NodesAndOneNodeWithTpdoValues) {
     ASSERT_TRUE(n.at("identity").is_object()) << json::serialize(n);
     EXPECT_EQ(n.at("identity").as_object().at("deviceType").to_number<std::uint32_t>(), 0x00020192U);
     EXPECT_TRUE(n.contains("emcyCount"));
+    EXPECT_TRUE(n.at("lastEmcy").is_null()) << "no EMCY since the boot-up";
   }
   EXPECT_TRUE(saw5);
 
@@ -257,9 +267,46 @@ TEST(Rest, ObjectDictionaryFromTheEds) {
     EXPECT_TRUE(sub.contains("default"));
   }
   EXPECT_TRUE(mode);
+  EXPECT_FALSE(od.json().as_object().at("gateway").as_bool());
   auto none = rig.request("GET", "/api/v1/networks/1/nodes/42/od");
   EXPECT_EQ(none.status, 404);
   EXPECT_EQ(none.content_type, "application/problem+json");
+}
+
+// The gateway's own node (127 in the demo) has no EDS; its dictionary is the
+// built-in one that SDO requests to 127 are answered from, so the dashboard
+// can show and read it like any node's.
+TEST(Rest, ObjectDictionaryOfTheGatewaysOwnNode) {
+  RestRig rig;
+  auto od = rig.request("GET", "/api/v1/networks/1/nodes/127/od");
+  ASSERT_EQ(od.status, 200) << od.body.substr(0, 300);
+  const auto& o = od.json().as_object();
+  EXPECT_TRUE(o.at("gateway").as_bool());
+  EXPECT_EQ(o.at("node").to_number<int>(), 127);
+  EXPECT_EQ(o.at("productName").as_string(), "canopen-gateway");
+  EXPECT_FALSE(o.at("dcf").as_bool());
+  bool heartbeat = false, identity = false;
+  for (const auto& v : o.at("objects").as_array()) {
+    const auto& obj = v.as_object();
+    const auto index = obj.at("index").to_number<int>();
+    if (index == 0x1017) {
+      heartbeat = true;
+      const auto& sub = obj.at("subs").as_array().at(0).as_object();
+      EXPECT_EQ(sub.at("type").as_string(), "u16");
+      EXPECT_EQ(sub.at("access").as_string(), "rw");
+    }
+    if (index == 0x1018) {
+      identity = true;
+      EXPECT_EQ(obj.at("objectCode").as_string(), "RECORD");
+      EXPECT_GE(obj.at("subs").as_array().size(), 5U);
+    }
+  }
+  EXPECT_TRUE(heartbeat) << "1017h producer heartbeat time";
+  EXPECT_TRUE(identity) << "1018h identity";
+  // Every object listed can be read by SDO at that node-ID.
+  EXPECT_EQ(rig.request("GET", "/api/v1/networks/1/nodes/127/sdo/1017/0").status, 200);
+  // Another node-ID with no EDS is still a 404.
+  EXPECT_EQ(rig.request("GET", "/api/v1/networks/1/nodes/126/od").status, 404);
 }
 
 TEST(Rest, EmcyListNewestFirst) {
@@ -273,6 +320,27 @@ TEST(Rest, EmcyListNewestFirst) {
   const auto& o = e.json().as_object();
   ASSERT_GE(o.at("emcy").as_array().size(), 2U) << e.body;
   EXPECT_GE(o.at("emcyCount").to_number<int>(), 2);
+  // The simulated devices alternate an error and its reset (0000h); only
+  // the errors count as errors.
+  const auto& list = o.at("emcy").as_array();
+  int errors = 0;
+  for (const auto& v : list) errors += v.as_object().at("errorCode").to_number<int>() != 0 ? 1 : 0;
+  const auto error_count = o.at("emcyErrorCount").to_number<std::uint64_t>();
+  EXPECT_GE(error_count, 1U);
+  EXPECT_LT(error_count, o.at("emcyCount").to_number<std::uint64_t>()) << "a reset is no error";
+  if (o.at("emcyCount").to_number<std::size_t>() == list.size()) {
+    EXPECT_EQ(error_count, static_cast<std::uint64_t>(errors)) << e.body;
+  }
+  // The node list has the newest one as the node's last EMCY (or a newer one).
+  auto nodes = rig.request("GET", "/api/v1/networks/1/nodes");
+  for (const auto& v : nodes.json().as_object().at("nodes").as_array()) {
+    const auto& n = v.as_object();
+    if (n.at("node").to_number<int>() != 5) continue;
+    ASSERT_TRUE(n.at("lastEmcy").is_object()) << nodes.body;
+    EXPECT_GE(n.at("lastEmcy").as_object().at("seq").to_number<std::uint64_t>(),
+              list[0].as_object().at("seq").to_number<std::uint64_t>());
+    EXPECT_TRUE(n.at("lastEmcy").as_object().contains("errorRegister"));
+  }
   const auto& first = o.at("emcy").as_array()[0].as_object();
   EXPECT_THAT(std::string(first.at("timestamp").as_string()), HasSubstr("Z"));
   EXPECT_EQ(first.at("manufacturerData").as_string().size(), 10U) << "5 bytes in hex";
