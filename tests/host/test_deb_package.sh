@@ -17,7 +17,7 @@ TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
 export TMPDIR
 trap 'kill $MOSQ_PID $SUB_PID $GW_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
 . "$(dirname "$0")/../system/lib.sh"
-. "$(dirname "$0")/installed.sh"
+. "$(dirname "$0")/../system/installed.sh"
 chmod 755 "$T"  # the service's user reads the unpacked package
 
 # ---- 1: build it, control data --------------------------------------------------

@@ -13,7 +13,7 @@ TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
 export TMPDIR
 trap 'kill $GW_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
 . "$(dirname "$0")/../system/lib.sh"
-. "$(dirname "$0")/installed.sh"
+. "$(dirname "$0")/../system/installed.sh"
 : "${SOURCE_DIR:?}"
 R=$T/root            # stands for /
 P=$R/usr/local       # the prefix

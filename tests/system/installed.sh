@@ -1,6 +1,7 @@
-# Helpers for test_install.sh and test_deb_package.sh: the gateway as a user
-# gets it (cmake --install, or the .deb unpacked), started the way its
-# systemd unit starts it. Sourced after tests/system/lib.sh; uses $T.
+# Helpers for tests of the gateway as a user gets it (cmake --install, or the
+# .deb unpacked: tests/host/test_install.sh, test_deb_package.sh; its example
+# configuration on can0: test_installed_example_on_can0.sh), started the way
+# its systemd unit starts it. Sourced after tests/system/lib.sh; uses $T.
 
 free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 
@@ -41,13 +42,10 @@ sys.exit(0 if "installed copy" in body else 1)
 PY
 }
 
-# check_can0_variant CONFIG GATEWAY: the example made a real-bus
-# configuration as its comments say (the simulated network deleted, the can0
-# network uncommented) is accepted up to opening can0: its EDS files are
-# found and read, so the gateway stops with exit 3 (CAN unavailable: no can0
-# here, or no SocketCAN in this kernel), not 2 (configuration).
-check_can0_variant() {
-  local config=$1 gateway=$2 real=$T/real-bus.yaml rc=0
+# real_bus_config CONFIG OUT: the example made a real-bus configuration as
+# its comments say: the simulated network deleted, the can0 network
+# uncommented.
+real_bus_config() {
   awk '
     /^  - simulated: true/ { skip = 1; next }
     skip && /^  [^ ]/ { skip = 0 }
@@ -57,9 +55,20 @@ check_can0_variant() {
     on && /^$/ { on = 0 }
     on { sub(/^  # /, "  ") }
     { print }
-  ' "$config" > "$real"
-  grep -q "^  - interface: can0" "$real" || fail "no can0 network to uncomment in $config"
-  grep -q "^  - simulated: true" "$real" && fail "the simulated network is still in $real"
+  ' "$1" > "$2"
+  grep -q "^  - interface: can0" "$2" || fail "no can0 network to uncomment in $1"
+  grep -q "^  - simulated: true" "$2" && fail "the simulated network is still in $2"
+  return 0
+}
+
+# check_can0_variant CONFIG GATEWAY: the example's real-bus configuration is
+# accepted up to opening can0: its EDS files are found and read (a bad one
+# is a configuration error), so the gateway stops with exit 3 (CAN
+# unavailable: no can0 here, or no SocketCAN in this kernel), not 2.
+# On can0 itself: tests/system/test_installed_example_on_can0.sh.
+check_can0_variant() {
+  local gateway=$2 real=$T/real-bus.yaml rc=0
+  real_bus_config "$1" "$real"
   if ip link show can0 > /dev/null 2>&1; then
     echo "SKIP: this machine has a can0; the real-bus example is not started"
     return 0
