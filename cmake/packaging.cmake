@@ -107,7 +107,6 @@ set(CPACK_DEBIAN_PACKAGE_MAINTAINER "${CANOPEN_DEB_MAINTAINER}")
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)  # canopen-gateway_<version>_<arch>.deb
 set(CPACK_DEBIAN_PACKAGE_SECTION net)
 set(CPACK_DEBIAN_PACKAGE_PRIORITY optional)
-set(CPACK_PACKAGING_INSTALL_PREFIX /usr)
 # Shared libraries found by dpkg-shlibdeps (dpkg-dev); adduser for postinst.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
 set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")  # deb-systemd-helper: essential init-system-helpers
@@ -115,9 +114,11 @@ set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")  # deb-systemd-helper: essential ini
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "mosquitto")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "mosquitto-clients, can-utils")
 # Binaries without debug info: smaller, and stripping is faster than
-# compressing it.
+# compressing it. xz as Debian packages are, on every core (about 1.4 MB
+# and 5 s here; gzip: 2.3 MB, 2 s faster).
 set(CPACK_STRIP_FILES ON)
 set(CPACK_DEBIAN_COMPRESSION_TYPE xz)
+set(CPACK_THREADS 0)
 set(CPACK_INSTALL_DEFAULT_DIRECTORY_PERMISSIONS ${CMAKE_INSTALL_DEFAULT_DIRECTORY_PERMISSIONS})
 
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA
@@ -132,4 +133,8 @@ set(CPACK_PRE_BUILD_SCRIPTS ${PROJECT_SOURCE_DIR}/cmake/deb-staging.cmake)
 set(CPACK_CANOPEN_DATA_REL ${GW_DATA_REL})  # CPACK_*: what the script sees
 set(CPACK_CANOPEN_DOC_REL ${GW_DOC_REL})
 set(CPACK_CANOPEN_SOURCE_DIR ${PROJECT_SOURCE_DIR})
+# `package_source`: the sources without build trees, git or npm data.
+set(CPACK_SOURCE_GENERATOR TGZ)
+set(CPACK_SOURCE_PACKAGE_FILE_NAME ${GW_NAME}-${PROJECT_VERSION})
+set(CPACK_SOURCE_IGNORE_FILES "/build[^/]*/" "/\\\\.git/" "/node_modules/" "\\\\.swp$")  # regexes, escaped twice
 include(CPack)
