@@ -19,6 +19,8 @@ PACKAGES=(
   user-mode-linux kmod
   # dashboard browser test (tests/browser): Debian's headless Chromium, driven by playwright-core from npm
   chromium chromium-driver
+  # the Debian package's test (tests/host/test_deb_package.sh) checks it with lintian
+  lintian
 )
 # Node.js and npm only where there are none: a machine with another Node.js
 # build (NodeSource's nodejs bundles npm) must not get Debian's npm, which

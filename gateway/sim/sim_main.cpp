@@ -30,8 +30,34 @@ struct UsageError : std::invalid_argument {
 };
 
 constexpr const char* kUsage =
-    "usage: canopen-sim --can IFACE --node N=EDSFILE [--node ...] [--heartbeat MS] [--tpdo-period MS] "
-    "[--emcy-period MS] [--sync-period MS] [--auto-start]";
+    "usage: canopen-sim --can IFACE --node N=EDSFILE [--node ...] [--heartbeat MS]\n"
+    "                   [--tpdo-period MS] [--emcy-period MS] [--sync-period MS] [--auto-start]";
+
+// --help; also the body of the installed manual page (cmake/packaging.cmake).
+constexpr const char* kHelp = R"(
+Simulated CANopen devices on a SocketCAN interface, for trying a master (such
+as canopen-gateway) without hardware. Each node boots up, sends its heartbeat,
+answers SDOs over its whole dictionary and NMT, and while operational changes
+the values its TPDOs map. One line per event goes to stdout ("ready" once the
+interface is open).
+
+  --can IFACE        SocketCAN interface (vcan0, can0, ...). Required.
+  --node N=EDSFILE   a device with node-ID N (1..127) described by EDSFILE
+                     (EDS or DCF); repeatable, at least one.
+  --heartbeat MS     every node's heartbeat period (1017h); 0: none.
+                     Default: 1000.
+  --tpdo-period MS   how often the mapped values change; 0: never.
+                     Default: 100.
+  --emcy-period MS   an EMCY every MS (raised, reset at the next); 0: none.
+                     Default: 0.
+  --sync-period MS   the first node also produces SYNC every MS, so
+                     synchronous TPDOs flow; 0: no SYNC. Default: 0.
+  --auto-start       go operational after boot-up without an NMT start.
+  -h, --help         print this text and exit.
+
+Exit status: 0 after SIGINT or SIGTERM; 2 for a bad command line or EDS file;
+3 when the CAN interface cannot be opened.
+)";
 
 unsigned long number(std::string_view what, std::string_view s, unsigned long max) {
   unsigned long v = 0;
@@ -47,6 +73,7 @@ unsigned long number(std::string_view what, std::string_view s, unsigned long ma
 }
 
 struct Args {
+  bool help = false;
   std::string iface;
   std::vector<std::pair<std::uint8_t, std::string>> nodes;
   canopen::sim::SimulatorOptions options;
@@ -82,7 +109,8 @@ Args parse(const std::vector<std::string>& a) {
     } else if (opt == "--auto-start") {
       out.options.auto_start = true;
     } else if (opt == "--help" || opt == "-h") {
-      throw UsageError(kUsage);
+      out.help = true;
+      return out;
     } else {
       throw UsageError("unknown option '" + opt + "'");
     }
@@ -111,6 +139,10 @@ int main(int argc, char** argv) {
     args = parse(std::vector<std::string>(argv + 1, argv + argc));
   } catch (const UsageError& e) {
     return fail(2, e.what());
+  }
+  if (args.help) {
+    std::printf("%s\n%s", kUsage, kHelp);
+    return 0;
   }
   // EDS files first: a bad file is refused before touching the bus.
   std::vector<std::pair<std::uint8_t, canopen::eds::DeviceDescription>> descriptions;
