@@ -29,31 +29,9 @@ struct UsageError : std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-// --help: every option with its default (SimulatorOptions).
-constexpr const char* kHelp =
-    "usage: canopen-sim --can IFACE --node N=EDSFILE [--node ...] [--heartbeat MS]\n"
-    "                   [--tpdo-period MS] [--emcy-period MS] [--sync-period MS]\n"
-    "                   [--auto-start]\n"
-    "\n"
-    "Simulated CANopen devices on a SocketCAN interface, described by EDS files.\n"
-    "Prints one line per event on stdout (\"ready\", \"node 5 boot-up\", ...).\n"
-    "\n"
-    "  --can IFACE        the SocketCAN interface (vcan0, can0). Required.\n"
-    "  --node N=EDSFILE   a device with node-ID N (1..127, or 0x hex) from an EDS\n"
-    "                     or DCF file; repeatable, at least one.\n"
-    "  --heartbeat MS     heartbeat period of every node (1017h), 0 = none.\n"
-    "                     Default: 1000.\n"
-    "  --tpdo-period MS   how often process values change, 0 = never. Default: 100.\n"
-    "  --emcy-period MS   a periodic EMCY, 0 = only on command. Default: 0.\n"
-    "  --sync-period MS   produce SYNC with this period, 0 = no. Default: 0.\n"
-    "  --auto-start       go operational after boot-up without an NMT start.\n"
-    "                     Default: wait for NMT start.\n"
-    "  -h, --help         print this text and exit.\n"
-    "\n"
-    "Exit status: 0 after SIGINT or SIGTERM; 2 for a bad command line or EDS file;\n"
-    "3 when the CAN interface cannot be used.\n";
-
-struct HelpRequested {};
+constexpr const char* kUsage =
+    "usage: canopen-sim --can IFACE --node N=EDSFILE [--node ...] [--heartbeat MS] [--tpdo-period MS] "
+    "[--emcy-period MS] [--sync-period MS] [--auto-start]";
 
 unsigned long number(std::string_view what, std::string_view s, unsigned long max) {
   unsigned long v = 0;
@@ -104,7 +82,7 @@ Args parse(const std::vector<std::string>& a) {
     } else if (opt == "--auto-start") {
       out.options.auto_start = true;
     } else if (opt == "--help" || opt == "-h") {
-      throw HelpRequested{};
+      throw UsageError(kUsage);
     } else {
       throw UsageError("unknown option '" + opt + "'");
     }
@@ -131,9 +109,6 @@ int main(int argc, char** argv) {
   Args args;
   try {
     args = parse(std::vector<std::string>(argv + 1, argv + argc));
-  } catch (const HelpRequested&) {
-    std::fputs(kHelp, stdout);
-    return 0;
   } catch (const UsageError& e) {
     return fail(2, e.what());
   }

@@ -1,8 +1,7 @@
 #!/bin/sh
 # What the canopen-gateway process says to a person (issue 13, items 2 and 3):
 #  1. --help describes every flag of the contract's command line with its
-#     default; --version prints the version; both exit 0 (canopen-sim's
-#     --help too);
+#     default; --version prints the version; both exit 0;
 #  2. at start-up one line per listener with a URL that works when pasted
 #     (dashboard, REST API, WebSocket events, /metrics, MQTT broker/topics);
 #  3. errors are one line on stderr with exit 2, without library internals,
@@ -54,14 +53,6 @@ for text in "127.0.0.1:8080" "else 127" "else json" "else info" "else the host" 
 done
 [ "$(awk 'length($0) > 80' "$T/out" | wc -l)" -eq 0 ] || fail "--help is wider than 80 columns"
 pass "--help: every flag with its default, $(wc -l < "$T/out") lines"
-
-# canopen-sim too: its options with their defaults, exit 0.
-"$SIM" --help > "$T/sim-help" 2> "$T/err" || fail "canopen-sim --help: exit $?: $(cat "$T/err")"
-for opt in --can --node --heartbeat --tpdo-period --emcy-period --sync-period --auto-start; do
-  grep -qE -- "^  $opt " "$T/sim-help" || fail "canopen-sim --help does not describe $opt"
-done
-[ "$(grep -c 'Default' "$T/sim-help")" -ge 5 ] || fail "canopen-sim --help gives no defaults"
-pass "canopen-sim --help"
 
 VERSION=$(sed -n 's/^project([a-z_]* VERSION \([0-9.]*\).*/\1/p' "$SOURCE_DIR/CMakeLists.txt")
 run_gateway --version
