@@ -1,4 +1,5 @@
-// Command line of canopen-gateway (../shared/api-contract.md, "Command line").
+// Command line of canopen-gateway (the API contract's "Command line"; the
+// whole of it, with defaults, is help_text()).
 #pragma once
 
 #include <optional>
@@ -37,15 +38,20 @@ struct CliOptions {
 // "ADDR:PORT" with an IPv4 address, a host name or [IPv6]; false when malformed.
 bool split_host_port(const std::string& text, std::string& host, unsigned short& port);
 
-// Bad command line: what() is one line naming the flag and the reason.
+// Bad command line: what() is one line naming the flag and the reason, with
+// the quoted input made printable() (no raw control characters).
 class UsageError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit UsageError(const std::string& what) : std::runtime_error(printable(what)) {}
 };
 
 // Parses argv (without argv[0]). Throws UsageError.
 CliOptions parse_cli(const std::vector<std::string>& args);
 
+// The synopsis: "usage: canopen-gateway [--config FILE] ..." (a few lines).
 std::string usage_text();
+// What --help prints: the synopsis, then every flag with what it does and
+// its default, the exit statuses and where to read on. At most 80 columns.
+std::string help_text();
 
 }  // namespace gateway

@@ -16,6 +16,51 @@ std::optional<LogLevel> parse_log_level(std::string_view s) {
 
 namespace {
 
+// Length of the UTF-8 sequence at s[i] that printable() keeps, 0 when the
+// byte must be escaped (control, C1 control, malformed, overlong, surrogate).
+std::size_t kept_length(std::string_view s, std::size_t i) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+  const unsigned c = b(i);
+  if (c < 0x20 || c == 0x7F) return 0;
+  if (c < 0x80) return 1;
+  std::size_t n = 0;
+  unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    n = 2;
+    if (c == 0xC2) lo = 0xA0;  // U+0080..U+009F: C1 controls
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    n = 3;
+    if (c == 0xE0) lo = 0xA0;
+    if (c == 0xED) hi = 0x9F;
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    n = 4;
+    if (c == 0xF0) lo = 0x90;
+    if (c == 0xF4) hi = 0x8F;
+  } else {
+    return 0;
+  }
+  if (i + n > s.size() || b(i + 1) < lo || b(i + 1) > hi) return 0;
+  for (std::size_t k = 2; k < n; ++k)
+    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
+  return n;
+}
+
+void append_printable(std::string& out, std::string_view s, bool newline_as_backslash_n) {
+  static constexpr char kHex[] = "0123456789ABCDEF";
+  for (std::size_t i = 0; i < s.size();) {
+    if (const auto n = kept_length(s, i)) {
+      out.append(s.data() + i, n);
+      i += n;
+    } else if (s[i] == '\n' && newline_as_backslash_n) {
+      out.append("\\n");
+      ++i;
+    } else {
+      const auto c = static_cast<unsigned char>(s[i++]);
+      out.append({'\\', 'x', kHex[c >> 4], kHex[c & 0xF]});
+    }
+  }
+}
+
 constexpr std::string_view kNames[] = {"TRACE", "DEBUG", "INFO ", "WARN ", "ERROR"};
 
 void append_utc_now(std::string& out) {
@@ -34,16 +79,20 @@ void append_utc_now(std::string& out) {
 
 }  // namespace
 
+std::string printable(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  append_printable(out, text, false);
+  return out;
+}
+
 void Logger::log(LogLevel l, std::string_view msg) {
   if (!enabled(l)) return;
   append_utc_now(buffer_);
   buffer_.push_back(' ');
   buffer_.append(kNames[static_cast<int>(l)]);
   buffer_.push_back(' ');
-  for (char c : msg) {
-    if (c == '\n') buffer_.append("\\n");
-    else buffer_.push_back(c);
-  }
+  append_printable(buffer_, msg, true);
   buffer_.push_back('\n');
   if (l >= LogLevel::Warn || buffer_.size() > 64 * 1024) flush();
 }

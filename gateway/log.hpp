@@ -1,6 +1,7 @@
 // Minimal leveled logger for the gateway process: one line per record,
 // "<UTC RFC 3339 time> <LEVEL> <message>", written to stderr. Newlines in a
-// message are written as "\n" so a record is always one line.
+// message are written as "\n" and other control characters as printable()
+// does, so a record is always one line and cannot drive the terminal.
 //
 // Records below warn are buffered and written by flush() (the event loop
 // flushes after each batch of work), so a saturated bus logged at debug does
@@ -19,6 +20,12 @@ namespace gateway {
 enum class LogLevel { Trace, Debug, Info, Warn, Error };
 
 std::optional<LogLevel> parse_log_level(std::string_view s);
+
+// `text` made safe to quote in a one-line message (errors, the log):
+// control characters (C0, DEL, C1) and bytes that are not UTF-8 become
+// "\xNN" (one per byte); everything else, UTF-8 included, stays.
+// Idempotent: its output comes back unchanged. Thread-safe.
+std::string printable(std::string_view text);
 
 class Logger {
  public:

@@ -2,10 +2,13 @@
 // flags), opens every CAN network (or the simulated demo network) and runs
 // everything on one io_context: the CANopen stack, MQTT publishing and the
 // HTTP/WebSocket server. See gateway/app/app.hpp.
+#include <unistd.h>
+
 #include <csignal>
-#include <filesystem>
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <boost/asio/io_context.hpp>
@@ -17,6 +20,8 @@
 #include "config.hpp"
 #include "http_server.hpp"
 #include "log.hpp"
+#include "mqtt/mqtt_connection.hpp"
+#include "mqtt/publisher.hpp"
 #include "rest_api.hpp"
 
 namespace {
@@ -38,12 +43,72 @@ std::filesystem::path default_web_root() {
   return {};
 }
 
-void print_error(const std::string& msg) { std::fprintf(stderr, "canopen-gateway: error: %s\n", msg.c_str()); }
+// One line: whatever the message quotes cannot break it or drive the terminal.
+void print_error(const std::string& msg) {
+  std::fprintf(stderr, "canopen-gateway: error: %s\n", gateway::printable(msg).c_str());
+}
+
+// The broker URI as the publisher will read it, checked before anything
+// starts, so a bad one is a configuration error naming --mqtt or the key.
+void check_mqtt_uri(const gateway::Config& c) {
+  if (!c.mqtt.enabled) return;
+  try {
+    (void)gateway::mqtt::parse_endpoint(gateway::mqtt::normalize_server_uri(c.mqtt.uri));
+  } catch (const std::invalid_argument& e) {
+    throw gateway::ConfigError(c.mqtt.uri_origin + ": " + e.what());
+  }
+}
+
+// Why the listener could not be opened, for a person: the errno in words
+// and what usually helps, without the library's internals.
+std::string listen_failure(const std::system_error& e) {
+  const auto ec = e.code();
+  if (ec == std::errc::address_in_use) return "address already in use (is another gateway running?)";
+  if (ec == std::errc::permission_denied)
+    return "permission denied (ports below 1024 need root or CAP_NET_BIND_SERVICE)";
+  if (ec == std::errc::address_not_available) return "address not available (not an address of this machine)";
+  return ec.message();
+}
+
+// A host for URLs a person can paste: the listen address, or for a
+// wildcard listener this machine's name (which the Host check accepts).
+std::string url_host(const std::string& address) {
+  if (address == "0.0.0.0" || address == "::") {
+    char name[256] = {};
+    if (::gethostname(name, sizeof name - 1) == 0 && name[0] != '\0' && std::string(name) != "(none)" &&
+        std::string(name).find_first_of(" /:[]@") == std::string::npos)
+      return name;
+    return "127.0.0.1";
+  }
+  return address.find(':') != std::string::npos ? "[" + address + "]" : address;
+}
+
+// One line per thing a person may open, with its URL.
+void log_listeners(gateway::Logger& log, const gateway::Config& config, unsigned port) {
+  const auto& h = config.http;
+  const bool tls = !h.cert_file.empty();
+  const std::string authority = url_host(h.address) + ":" + std::to_string(port);
+  const std::string base = (tls ? "https://" : "http://") + authority;
+  std::string scope;
+  if (h.address == "0.0.0.0") scope = "listening on 0.0.0.0, every IPv4 address of this machine";
+  else if (h.address == "::") scope = "listening on ::, every address of this machine";
+  else if (h.loopback()) scope = "this machine only";
+  else scope = "listening on " + h.address;
+  const bool token = h.anonymous_role() == gateway::Role::None;
+  log.info("HTTP/WebSocket on " + base + " (" + scope + ")");
+  log.info("dashboard: " + base + "/");
+  log.info("REST API: " + base + "/api/v1/ (OpenAPI description: " + base + "/api/v1/openapi.json" +
+           (token ? "; needs a bearer token)" : ")"));
+  log.info("events (WebSocket): " + std::string(tls ? "wss://" : "ws://") + authority + "/api/v1/events" +
+           (token ? " (needs a bearer token)" : ""));
+  log.info("metrics: " + base + "/metrics" + (token ? " (needs a bearer token)" : ""));
+}
 
 int run(const gateway::CliOptions& opts) {
   gateway::Config config;
   try {
     config = gateway::merge(opts.config_file ? gateway::load_config(*opts.config_file) : gateway::Config{}, opts);
+    check_mqtt_uri(config);
     // Before CAN is opened and anything listens: a state directory that
     // cannot be written is a configuration error, not a failure later.
     gateway::check_state_dirs(config);
@@ -79,22 +144,24 @@ int run(const gateway::CliOptions& opts) {
   std::unique_ptr<gateway::http::HttpServer> http;
   try {
     http = std::make_unique<gateway::http::HttpServer>(io, http_cfg, &log);
-    app->add_consumer([srv = http.get()](const gateway::EncodedEventPtr& ev) { srv->publish(ev); });
-    app->set_protobuf_demand([srv = http.get()] { return srv->binary_clients() > 0; });
-    if (config.http.auth && config.http.tokens.empty())
-      log.warn("http: no tokens configured: every local process may use the API as admin (loopback only)");
-    http->set_authorizer(app->http_authorizer());
-    gateway::register_api_routes(*http, *app);
-    http->start();
   } catch (const std::exception& e) {
-    print_error("http: cannot listen on " + config.http.address + ":" + std::to_string(config.http.port) + ": " +
-                e.what());
+    // TLS files that do not load (the rest was checked with the configuration).
+    print_error((config.http.tls_origin.empty() ? std::string("http") : config.http.tls_origin) + ": " + e.what());
     return kExitConfig;
   }
-  log.info("HTTP/WebSocket on " + std::string(config.http.cert_file.empty() ? "http://" : "https://") +
-           (config.http.address.find(':') != std::string::npos ? "[" + config.http.address + "]"
-                                                                : config.http.address) +
-           ":" + std::to_string(http->bound_port()) + " (events: /api/v1/events)");
+  app->add_consumer([srv = http.get()](const gateway::EncodedEventPtr& ev) { srv->publish(ev); });
+  app->set_protobuf_demand([srv = http.get()] { return srv->binary_clients() > 0; });
+  if (config.http.auth && config.http.tokens.empty())
+    log.warn("http: no tokens configured: every local process may use the API as admin (loopback only)");
+  http->set_authorizer(app->http_authorizer());
+  gateway::register_api_routes(*http, *app);
+  try {
+    http->start();
+  } catch (const std::system_error& e) {
+    print_error(config.http.listen_origin + ": " + listen_failure(e));
+    return kExitConfig;
+  }
+  log_listeners(log, config, http->bound_port());
 
   app->start();
 
@@ -125,7 +192,7 @@ int main(int argc, char** argv) {
     return kExitConfig;
   }
   if (opts.help) {
-    std::fputs(gateway::usage_text().c_str(), stdout);
+    std::fputs(gateway::help_text().c_str(), stdout);
     return 0;
   }
   if (opts.version) {

@@ -596,7 +596,9 @@ void App::start_mqtt() {
     pub->publish(ev);
   });
   pub->start();
-  log_.info("MQTT: publishing to " + config_.mqtt.uri + " as canopen/" + config_.gateway_id + "/...");
+  // Where to look, for a person: the broker and the topics to subscribe to.
+  log_.info("MQTT: broker " + config_.mqtt.uri + ", topic prefix canopen/" + config_.gateway_id + "/ (subscribe to canopen/" +
+            config_.gateway_id + "/#)");
 }
 
 std::string App::status_payload(bool online) const {
@@ -809,9 +811,9 @@ std::optional<ApiReply> resolve_type(const canopen::eds::DeviceDescription* desc
     return std::nullopt;
   }
   if (*entry == nullptr) {
-    char what[40];
-    std::snprintf(what, sizeof what, "%04Xh sub %u", static_cast<unsigned>(index), static_cast<unsigned>(sub));
-    return problem(404, std::string("the node's EDS/DCF has no object ") + what + " (give ?type= to ask anyway)", opts);
+    return problem(404, "the node's EDS/DCF has no object " + canopen::od::object_label(index, sub) +
+                            " (give ?type= to ask anyway)",
+                   opts);
   }
   out = (*entry)->type;
   return std::nullopt;
@@ -861,7 +863,7 @@ void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
     }
     auto v = canopen::decode(type, *bytes);
     if (!v) {
-      reply(problem(400, "object " + hex4(index) + " sub " + std::to_string(sub) + " is not a " +
+      reply(problem(400, canopen::od::object_label(index, sub) + ": the value read is not a " +
                              std::string(canopen::cia309_name(type)) + ": " + v.error().detail,
                     opts));
       return;
@@ -926,7 +928,8 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
     reply(std::move(*err));
     return;
   }
-  // The value is checked against type and EDS limits before anything goes on the bus.
+  // The value is checked against type and EDS limits before anything goes
+  // on the bus; the errors name the object and the type.
   auto value = params->value_as(type);
   if (!value) {
     reply(bad_request(value.error(), opts));
@@ -935,7 +938,7 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
   if (entry != nullptr) {
     std::string detail;
     if (auto ec = canopen::check_limits(*value, entry->low, entry->high, &detail)) {
-      reply(problem(400, "value out of range for " + hex4(index) + " sub " + std::to_string(sub) + ": " + detail, opts));
+      reply(problem(400, canopen::od::object_label(index, sub) + ": " + detail, opts));
       return;
     }
   }

@@ -3,6 +3,7 @@
 #include "canopen/eds/eds.hpp"
 #include "mqtt/topic_filter.hpp"
 
+#include <arpa/inet.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -122,6 +123,14 @@ bool valid_topic_level(const std::string& s) {
     const auto c = static_cast<unsigned char>(ch);
     return c <= 0x20 || c == 0x7F || c == '/' || c == '+' || c == '#';
   });
+}
+
+// An IPv4 or IPv6 literal (an IPv6 one may carry a %scope), what the HTTP
+// server can listen on.
+bool ip_literal(const std::string& s) {
+  unsigned char buf[16];
+  if (::inet_pton(AF_INET, s.c_str(), buf) == 1) return true;
+  return ::inet_pton(AF_INET6, s.substr(0, s.find('%')).c_str(), buf) == 1;
 }
 
 std::chrono::milliseconds ms(const At& a, std::uint64_t max = 65535) {
@@ -244,6 +253,7 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   auto uri = a.get("uri");
   if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
   m.uri = uri->str();
+  m.uri_origin = uri->where();
   m.enabled = true;
   if (auto v = a.get("client-id")) m.client_id = v->str();
   if (auto v = a.get("username")) m.username = v->str();
@@ -307,12 +317,14 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
                 "web-root", "max-connections", "max-connections-per-address"});
   if (auto v = a.get("listen")) {
     if (!split_host_port(v->str(), h.address, h.port)) v->fail("'" + v->str() + "' is not ADDR:PORT");
+    h.listen_origin = v->where() + " " + v->str();
   }
   if (auto t = a.get("tls")) {
     t->expect_map({"cert", "key"});
     auto cert = t->get("cert");
     auto key = t->get("key");
     if (!cert || !key) t->fail("needs both cert and key");
+    h.tls_origin = t->where();
     h.cert_file = resolve(dir, cert->str());
     h.key_file = resolve(dir, key->str());
     std::error_code ec;
@@ -423,6 +435,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
       if (!valid_topic_level(c.gateway_id)) v->fail("'" + c.gateway_id + "' cannot be an MQTT topic level");
     }
     if (auto v = g->get("node-id")) default_node_id = static_cast<std::uint8_t>(v->integer(1, 127));
+    c.node_id = default_node_id;
     if (auto v = g->get("log-level")) {
       auto l = parse_log_level(v->str());
       if (!l) v->fail("'" + v->str() + "' is not one of trace, debug, info, warn, error");
@@ -494,10 +507,11 @@ Config merge(Config c, const CliOptions& cli) {
   if (cli.gateway_id) c.gateway_id = *cli.gateway_id;
   if (c.gateway_id.empty()) c.gateway_id = default_gateway_id();
   if (cli.node_id) {
-    for (auto& n : c.networks) n.node_id = static_cast<std::uint8_t>(*cli.node_id);
+    c.node_id = static_cast<std::uint8_t>(*cli.node_id);
+    for (auto& n : c.networks) n.node_id = c.node_id;
   }
-  const std::uint8_t own = cli.node_id ? static_cast<std::uint8_t>(*cli.node_id)
-                                       : (c.networks.empty() ? std::uint8_t{127} : c.networks.front().node_id);
+  // A network the flags add (--can, --demo) gets gateway.node-id, as a file network does.
+  const std::uint8_t own = c.node_id;
   // --can replaces the file's list of networks; settings of a file network
   // with the same interface are kept.
   if (!cli.can_interfaces.empty()) {
@@ -553,10 +567,21 @@ Config merge(Config c, const CliOptions& cli) {
   if (cli.mqtt_uri) {
     c.mqtt.enabled = true;
     c.mqtt.uri = *cli.mqtt_uri;
+    c.mqtt.uri_origin = "--mqtt " + *cli.mqtt_uri;
   }
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
   if (c.mqtt.client_id.empty()) c.mqtt.client_id = "canopen-gateway-" + c.gateway_id;
-  if (cli.http) split_host_port(*cli.http, c.http.address, c.http.port);
+  if (cli.http) {
+    split_host_port(*cli.http, c.http.address, c.http.port);
+    c.http.listen_origin = "--http " + *cli.http;
+  }
+  if (c.http.listen_origin.empty()) c.http.listen_origin = "http.listen not set, default 127.0.0.1:8080";
+  // The server binds an address, it does not resolve names; "localhost" is
+  // the one name everybody means the same by.
+  if (c.http.address == "localhost") c.http.address = "127.0.0.1";
+  if (!ip_literal(c.http.address))
+    throw ConfigError(c.http.listen_origin + ": '" + c.http.address +
+                      "' is not an IP address (listen on an address of this machine, 127.0.0.1, or 0.0.0.0 for all)");
   // --demo is for looking at on this machine: no login only where nobody
   // else can reach it and no tokens say otherwise (api-contract).
   if (c.demo && c.http.tokens.empty() && c.http.loopback()) c.http.auth = false;
@@ -584,25 +609,33 @@ Config merge(Config c, const CliOptions& cli) {
     throw ConfigError(where + ": networks: no network configured (use --can IFACE, networks: in the file, or --demo)");
   for (const auto& net : c.networks) {
     for (const auto& n : net.nodes) {
-      if (n.id == net.node_id)
-        throw ConfigError(where + ": node " + std::to_string(n.id) + " is the gateway's own node-ID on " +
-                          (net.simulated ? std::string("the demo network") : net.interface));
+      if (n.id != net.node_id) continue;
+      // Blame the flag that brought the two together, else the file.
+      const auto eds = std::find_if(cli.eds.begin(), cli.eds.end(), [&](const EdsOption& e) { return e.node == n.id; });
+      const std::string blame = eds != cli.eds.end() ? "--eds " + std::to_string(eds->node) + "=" + eds->file
+                                : cli.node_id       ? "--node-id " + std::to_string(*cli.node_id)
+                                                    : where;
+      throw ConfigError(blame + ": node " + std::to_string(n.id) + " is the gateway's own node-ID on " +
+                        (net.simulated ? std::string("the demo network") : net.interface));
     }
   }
   // Tokenless MQTT requests are refused unless mqtt.requests-role says
   // otherwise (the broker's users are not the gateway's). The demo without
   // tokens lets them read, as its tour does; writes need the key set.
   if (!c.mqtt.requests_role) c.mqtt.requests_role = c.demo && c.http.tokens.empty() ? Role::Viewer : Role::None;
+  // These blame the listen address (flag or file:line): it is what made
+  // tokens and TLS necessary.
   if (c.http.auth && !c.http.loopback()) {
+    const std::string tokens_in = c.source.empty() ? std::string() : " in " + c.source;
     if (c.http.tokens.empty())
-      throw ConfigError(where + ": http.tokens: none configured, and http.listen " + c.http.address +
-                        " is not loopback" + (c.demo ? " (--demo turns authentication off on loopback only)" : "") +
-                        ": nobody could use the API; add tokens (see deploy/gateway.example.yaml), "
-                        "listen on 127.0.0.1, or set http.auth: false (not advised)");
+      throw ConfigError(c.http.listen_origin + ": not a loopback address, and no http.tokens are configured" + tokens_in +
+                        (c.demo ? " (--demo turns authentication off on loopback only)" : "") +
+                        ": nobody could use the API; add tokens (see gateway.example.yaml), listen on 127.0.0.1, "
+                        "or set http.auth: false (not advised)");
     if (c.http.cert_file.empty() && !c.http.plain_http)
-      throw ConfigError(where + ": http.tls: http.listen " + c.http.address +
-                        " is not loopback and bearer tokens would cross the network in clear text; configure "
-                        "http.tls (cert, key), or set http.plain-http: true to accept that");
+      throw ConfigError(c.http.listen_origin +
+                        ": not a loopback address, and bearer tokens would cross the network in clear text; "
+                        "configure http.tls (cert, key)" + tokens_in + ", or set http.plain-http: true to accept that");
   }
   return c;
 }

@@ -23,9 +23,10 @@
 
 namespace gateway {
 
+// what() is one line; quoted input in it is made printable() (log.hpp).
 class ConfigError : public std::runtime_error {
  public:
-  using std::runtime_error::runtime_error;
+  explicit ConfigError(const std::string& what) : std::runtime_error(printable(what)) {}
 };
 
 struct GuardingConfig {
@@ -102,6 +103,9 @@ enum class StorageMode : std::uint8_t { Disk, Outage, Memory };
 struct MqttConfig {
   bool enabled = false;
   std::string uri;  // tcp://host:1883, ssl://host:8883, ...
+  // Where uri came from, to start a message about it: "--mqtt tcp://x:1",
+  // "gw.yaml:12: mqtt.uri" (merge()).
+  std::string uri_origin;
   std::string client_id;  // default "canopen-gateway-<gateway id>"
   std::string username;
   std::string password;
@@ -136,9 +140,14 @@ struct TokenConfig {
 };
 
 struct HttpConfig {
-  std::string address = "127.0.0.1";
+  std::string address = "127.0.0.1";  // an IP literal once merge()d ("localhost" becomes 127.0.0.1)
   unsigned short port = 8080;
+  // Where address and port came from, with the value, to start a message
+  // about them: "--http 0.0.0.0:8080", "gw.yaml:30: http.listen
+  // 0.0.0.0:8080", "http.listen not set, default 127.0.0.1:8080" (merge()).
+  std::string listen_origin;
   std::string cert_file, key_file;  // HTTPS/WSS when both are set
+  std::string tls_origin;           // "gw.yaml:31: http.tls"
   // Names (or IP literals) besides the listen address that browsers may use
   // in Host (421 for others), and origins besides the gateway's own from
   // which browsers may change state or open the event stream (403 for
@@ -167,6 +176,7 @@ struct HttpConfig {
 struct Config {
   std::string source;      // the file it came from ("" = command line only)
   std::string gateway_id;  // default: host name
+  std::uint8_t node_id = 127;  // gateway.node-id: the own node-ID where a network does not say
   LogLevel log_level = LogLevel::Info;
   // Each network's event seq (seq-net<N>) and, by default, the MQTT queue.
   // merge() always sets it; "" (a Config built by hand) keeps nothing.

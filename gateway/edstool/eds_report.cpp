@@ -4,6 +4,7 @@
 #include <cstdio>
 
 #include "canopen/json_value.hpp"
+#include "log.hpp"
 
 namespace gateway::edstool {
 
@@ -24,18 +25,20 @@ std::string index_hex(std::uint16_t index) {
 
 }  // namespace
 
+// Lines quote the file's text: printable() keeps a control character in
+// it from ending the line or driving the terminal.
 std::string warning_line(const std::string& file, const std::string& warning) {
   // The reader writes "file:line: text" or "file: text" (eds.hpp).
-  if (!warning.starts_with(file)) return file + ": warning: " + warning;
+  if (!warning.starts_with(file)) return gateway::printable(file + ": warning: " + warning);
   const auto text = warning.find(": ", file.size());
-  if (text == std::string::npos) return file + ": warning: " + warning.substr(file.size());
-  return warning.substr(0, text) + ": warning: " + warning.substr(text + 2);
+  if (text == std::string::npos) return gateway::printable(file + ": warning: " + warning.substr(file.size()));
+  return gateway::printable(warning.substr(0, text) + ": warning: " + warning.substr(text + 2));
 }
 
 std::string error_line(const canopen::eds::EdsError& e) {
   std::string out = e.file();
   if (e.line() != 0) out += ":" + std::to_string(e.line());
-  return out + ": error: " + e.reason();
+  return gateway::printable(out + ": error: " + e.reason());
 }
 
 CheckResult check_file(const std::filesystem::path& file, std::optional<std::uint8_t> node_id) {
@@ -44,9 +47,9 @@ CheckResult check_file(const std::filesystem::path& file, std::optional<std::uin
     const auto d = canopen::eds::load_device_description(file, node_id, kFallbackNodeId);
     r.accepted = true;
     if (d.warnings.empty()) {
-      r.lines.push_back(file.string() + ": ok");
+      r.lines.push_back(gateway::printable(file.string()) + ": ok");
     } else {
-      r.lines.push_back(file.string() + ": ok, " + std::to_string(d.warnings.size()) +
+      r.lines.push_back(gateway::printable(file.string()) + ": ok, " + std::to_string(d.warnings.size()) +
                         (d.warnings.size() == 1 ? " warning" : " warnings"));
       for (const auto& w : d.warnings) r.lines.push_back(warning_line(file.string(), w));
     }

@@ -6,7 +6,9 @@
 //   HttpServer srv(ioc, cfg);           // throws on bad TLS files
 //   srv.add_route("GET", "/api/v1/networks/{net}", handler);
 //   srv.set_authorizer(...);            // optional
-//   srv.start();                        // binds; throws std::system_error
+//   srv.start();                        // binds; throws std::system_error:
+//                                       // code() the errno (address_in_use, ...),
+//                                       // what() "bind: <strerror>"
 //   ... srv.publish(event) from the event pipeline ...
 //   srv.stop();                         // or destroy it
 //

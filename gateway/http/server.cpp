@@ -22,6 +22,7 @@
 #include <boost/url/url_view.hpp>
 #include <optional>
 #include <stdexcept>
+#include <system_error>
 #include <unistd.h>
 #include <unordered_map>
 
@@ -1036,12 +1037,28 @@ void HttpServer::set_authorizer(Authorizer authorizer) { impl_->authorizer = std
 void HttpServer::start() {
   auto& i = *impl_;
   if (i.started) return;
-  const auto addr = net::ip::make_address(i.cfg.address);
+  // std::system_error with the errno and the step, not Boost's exception
+  // with its source location: the caller words it for people (main.cpp).
+  error_code ec;
+  const auto check = [&](const char* step) {
+    if (!ec) return;
+    if (i.acceptor.is_open()) {
+      error_code ignored;
+      i.acceptor.close(ignored);
+    }
+    throw std::system_error(std::error_code(ec.value(), std::generic_category()), step);
+  };
+  const auto addr = net::ip::make_address(i.cfg.address, ec);
+  check("address");
   const tcp::endpoint ep(addr, i.cfg.port);
-  i.acceptor.open(ep.protocol());
-  i.acceptor.set_option(tcp::acceptor::reuse_address(true));
-  i.acceptor.bind(ep);
-  i.acceptor.listen(net::socket_base::max_listen_connections);
+  i.acceptor.open(ep.protocol(), ec);
+  check("socket");
+  i.acceptor.set_option(tcp::acceptor::reuse_address(true), ec);
+  check("setsockopt");
+  i.acceptor.bind(ep, ec);
+  check("bind");
+  i.acceptor.listen(net::socket_base::max_listen_connections, ec);
+  check("listen");
   i.port = i.acceptor.local_endpoint().port();
   i.started = true;
   i.debug("listening on " + endpoint_string(i.acceptor.local_endpoint()) + (i.tls ? " (TLS)" : ""));

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "canopen/json_value.hpp"
+#include "canopen/od/object_dictionary.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
 #include "http_status.hpp"
@@ -219,7 +220,13 @@ std::optional<canopen::NmtCommand> nmt_command_from_name(std::string_view s) {
 }
 
 canopen::Result<canopen::Value> SdoWriteParams::value_as(canopen::DataType t) const {
-  return canopen::value_from_json(t, value);
+  auto v = canopen::value_from_json(t, value);
+  if (!v && index) {
+    auto e = v.error();
+    e.detail = canopen::od::object_label(*index, sub.value_or(0)) + ": " + e.detail;
+    return e;
+  }
+  return v;
 }
 
 namespace {

@@ -48,7 +48,9 @@ struct SdoWriteParams {
   std::string correlation_id;
 
   // The value as `t` (the request's type or the EDS one): errors are
-  // InvalidValue / ValueTooHigh / ValueTooLow with a detail for a 400.
+  // InvalidValue / ValueTooHigh / ValueTooLow with a detail for a 400 that
+  // names the object (when index is set) and the type:
+  // "1017h sub 0: 70000 is above 65535 (u16)".
   canopen::Result<canopen::Value> value_as(canopen::DataType t) const;
 };
 

@@ -3,7 +3,6 @@
 #include <boost/json/parse.hpp>
 #include <boost/json/value.hpp>
 #include <charconv>
-#include <cstdio>
 
 #include "canopen/json_value.hpp"
 #include "request_codec.hpp"
@@ -94,15 +93,14 @@ std::optional<RpdoBody> parse_rpdo_body(std::string_view body, const canopen::pd
     const canopen::pdo::MappingEntry* entry = nullptr;
     for (const auto& e : pdo.entries)
       if (!e.dummy && e.index == *index && e.sub == *sub) entry = &e;
-    char obj[32];
-    std::snprintf(obj, sizeof obj, "%04Xh sub %u", static_cast<unsigned>(*index), static_cast<unsigned>(*sub));
+    const std::string obj = canopen::od::object_label(*index, *sub);
     if (entry == nullptr) return fail(std::string(what) + " does not map " + obj);
+    // Type and limit errors name the type themselves: "6040h sub 0: 70000 is above 65535 (u16)".
     auto v = canopen::value_from_json(entry->type, it->at("value"));
-    if (!v) return fail(std::string(obj) + ": " + v.error().detail);
+    if (!v) return fail(obj + ": " + v.error().detail);
     if (const auto* se = od.find(*index, *sub)) {
       std::string detail;
-      if (canopen::check_limits(*v, se->low, se->high, &detail))
-        return fail("value out of range for " + std::string(obj) + ": " + detail);
+      if (canopen::check_limits(*v, se->low, se->high, &detail)) return fail(obj + ": " + detail);
     }
     out.values.push_back(canopen::MappedValue{*index, *sub, entry->name, std::move(*v)});
   }

@@ -49,7 +49,7 @@ expect_exit2() {
 
 # ---- 1: refused before anything listens ------------------------------------
 HTTP_ADDR=0.0.0.0 expect_exit2 "--demo off loopback without tokens" \
-  "http.tokens: none configured, and http.listen 0.0.0.0 is not loopback \(--demo turns authentication off on loopback only\)" \
+  "--http 0.0.0.0:[0-9]+: not a loopback address, and no http.tokens are configured \(--demo turns authentication off on loopback only\)" \
   --demo
 : > "$T/not-a-dir"
 printf 'gateway:\n  state-dir: %s/not-a-dir/state\n' "$T" > "$T/bad-state.yaml"

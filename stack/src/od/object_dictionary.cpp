@@ -13,15 +13,13 @@ namespace {
 
 std::error_code err(SdoAbort a) { return make_error_code(a); }
 
-// "1018h sub 2", for the detail of a failed read.
-std::string where(std::uint16_t index, std::uint8_t sub) {
+}  // namespace
+
+std::string object_label(std::uint16_t index, std::uint8_t sub) {
   std::array<char, 24> buf{};
   std::snprintf(buf.data(), buf.size(), "%04Xh sub %u", static_cast<unsigned>(index), static_cast<unsigned>(sub));
   return buf.data();
 }
-
-
-}  // namespace
 
 std::string_view to_string(ObjectCode c) {
   switch (c) {
@@ -107,11 +105,11 @@ SubEntry* ObjectDictionary::find(std::uint16_t index, std::uint8_t sub) {
 
 Result<Bytes> ObjectDictionary::read(std::uint16_t index, std::uint8_t sub) const {
   const Object* obj = find(index);
-  if (obj == nullptr) return {err(SdoAbort::NoSuchObject), where(index, sub) + ": no such object"};
+  if (obj == nullptr) return {err(SdoAbort::NoSuchObject), object_label(index, sub) + ": no such object"};
   auto it = obj->subs.find(sub);
-  if (it == obj->subs.end()) return {err(SdoAbort::NoSuchSubIndex), where(index, sub) + ": no such sub-index"};
+  if (it == obj->subs.end()) return {err(SdoAbort::NoSuchSubIndex), object_label(index, sub) + ": no such sub-index"};
   const SubEntry& entry = it->second;
-  if (!readable(entry.access)) return {err(SdoAbort::ReadOfWriteOnly), where(index, sub) + " is write-only"};
+  if (!readable(entry.access)) return {err(SdoAbort::ReadOfWriteOnly), object_label(index, sub) + " is write-only"};
   if (auto h = read_hooks_.find(index); h != read_hooks_.end()) return h->second(entry);
   if (auto h = dict_read_hooks_.find(index); h != dict_read_hooks_.end()) return h->second(*this, entry);
   return encode(entry.value);
@@ -164,9 +162,9 @@ std::optional<std::size_t> ObjectDictionary::upload_size(std::uint16_t index, st
 
 Result<Value> ObjectDictionary::get(std::uint16_t index, std::uint8_t sub) const {
   const Object* obj = find(index);
-  if (obj == nullptr) return {err(SdoAbort::NoSuchObject), where(index, sub) + ": no such object"};
+  if (obj == nullptr) return {err(SdoAbort::NoSuchObject), object_label(index, sub) + ": no such object"};
   auto it = obj->subs.find(sub);
-  if (it == obj->subs.end()) return {err(SdoAbort::NoSuchSubIndex), where(index, sub) + ": no such sub-index"};
+  if (it == obj->subs.end()) return {err(SdoAbort::NoSuchSubIndex), object_label(index, sub) + ": no such sub-index"};
   return it->second.value;
 }
 

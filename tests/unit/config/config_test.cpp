@@ -14,7 +14,9 @@
 namespace gateway {
 namespace {
 
+using ::testing::ContainsRegex;
 using ::testing::HasSubstr;
+using ::testing::Not;
 using namespace std::chrono_literals;
 
 const std::string kEds = std::string(CANOPEN_SOURCE_DIR) + "/deploy/eds/cia402-drive.eds";
@@ -372,14 +374,15 @@ TEST(Config, DemoOffLoopbackWithoutTokensIsRefused) {
   cli.demo = true;
   cli.http = "0.0.0.0:8080";
   const auto error = merge_error(Config{}, cli);
-  EXPECT_THAT(error, HasSubstr("command line: http.tokens: none configured, and http.listen 0.0.0.0 is not loopback"));
+  EXPECT_THAT(error, HasSubstr("--http 0.0.0.0:8080: not a loopback address, and no http.tokens are configured"));
   EXPECT_THAT(error, HasSubstr("--demo turns authentication off on loopback only"));
   EXPECT_EQ(error.find('\n'), std::string::npos) << "one line";
   // From the file too; with tokens the normal rules go on (TLS or plain-http).
   CliOptions demo_only;
   demo_only.demo = true;
   EXPECT_THAT(merge_error(parse_config("http: {listen: \"[::]:8080\"}\n", "gw.yaml"), demo_only),
-              HasSubstr("gw.yaml: http.tokens: none configured, and http.listen :: is not loopback"));
+              HasSubstr("gw.yaml:1: http.listen [::]:8080: not a loopback address, and no http.tokens are configured "
+                        "in gw.yaml"));
   // Explicitly without authentication, as without --demo: allowed (not advised).
   EXPECT_FALSE(merge(parse_config("http: {auth: false}\n", "gw.yaml"), cli).http.auth);
 }
@@ -409,15 +412,116 @@ TEST(Config, AnOpenListenerNeedsTokensAndTls) {
   CliOptions cli;
   cli.can_interfaces = {"can0"};
   cli.http = "0.0.0.0:8080";
-  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("http.tokens: none configured, and http.listen 0.0.0.0"));
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--http 0.0.0.0:8080: not a loopback address, and no http.tokens"));
   const std::string tokens =
       "http:\n  tokens:\n    - {name: a, role: admin, sha256: "
       "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n";
   // Tokens over plain HTTP off loopback: only when asked for.
-  EXPECT_THAT(merge_error(parse_config(tokens, "gw.yaml"), cli), HasSubstr("http.tls: http.listen 0.0.0.0"));
+  EXPECT_THAT(merge_error(parse_config(tokens, "gw.yaml"), cli),
+              HasSubstr("--http 0.0.0.0:8080: not a loopback address, and bearer tokens would cross the network in "
+                        "clear text; configure http.tls (cert, key) in gw.yaml"));
   EXPECT_NO_THROW(merge(parse_config(tokens + "  plain-http: true\n", "gw.yaml"), cli));
   Config open = parse_config("http: {auth: false}\n", "gw.yaml");
   EXPECT_NO_THROW(merge(open, cli));
+}
+
+// Issue 13: an error about a merged value blames where that value came from
+// (the flag, the file's line, or the default), not a key it did not come
+// from: `--http 0.0.0.0` with a file that has no tokens is the flag's doing.
+TEST(Config, ListenErrorsBlameWhereTheAddressCameFrom) {
+  const Config file = parse_config("gateway: {id: gw}\nhttp:\n  auth: true\n", "gw.yaml");
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.http = "0.0.0.0:8080";
+  const auto from_flag = merge_error(file, cli);
+  EXPECT_EQ(from_flag.rfind("--http 0.0.0.0:8080: ", 0), 0U) << from_flag;
+  EXPECT_THAT(from_flag, Not(ContainsRegex("gw\\.yaml:[0-9]"))) << "no line of the file is to blame";
+  EXPECT_THAT(from_flag, Not(HasSubstr("http.tokens:"))) << "nor the http.tokens key";
+
+  CliOptions can_only;
+  can_only.can_interfaces = {"can0"};
+  const auto from_file = merge_error(parse_config("gateway: {id: gw}\nhttp:\n  listen: 0.0.0.0:8080\n", "gw.yaml"),
+                                     can_only);
+  EXPECT_EQ(from_file.rfind("gw.yaml:3: http.listen 0.0.0.0:8080: ", 0), 0U) << from_file;
+
+  // What merge() records for messages after it (the listener in main.cpp).
+  EXPECT_EQ(merge(Config{}, can_only).http.listen_origin, "http.listen not set, default 127.0.0.1:8080");
+  EXPECT_EQ(merge(parse_config("http: {listen: 127.0.0.1:9000}\n", "gw.yaml"), can_only).http.listen_origin,
+            "gw.yaml:1: http.listen 127.0.0.1:9000");
+  CliOptions flag = can_only;
+  flag.http = "127.0.0.1:9001";
+  EXPECT_EQ(merge(parse_config("http: {listen: 127.0.0.1:9000}\n", "gw.yaml"), flag).http.listen_origin,
+            "--http 127.0.0.1:9001");
+}
+
+// The server binds an address and does not resolve names: a name is refused
+// at start with its origin; "localhost" is taken as 127.0.0.1.
+TEST(Config, ListenAddressIsAnIpAddress) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.http = "localhost:8080";
+  const Config c = merge(Config{}, cli);
+  EXPECT_EQ(c.http.address, "127.0.0.1");
+  EXPECT_TRUE(c.http.loopback());
+  cli.http = "[::1]:8080";
+  EXPECT_EQ(merge(Config{}, cli).http.address, "::1");
+  cli.http = "gw.plant.example:8080";
+  EXPECT_THAT(merge_error(Config{}, cli),
+              HasSubstr("--http gw.plant.example:8080: 'gw.plant.example' is not an IP address"));
+  CliOptions can_only;
+  can_only.can_interfaces = {"can0"};
+  EXPECT_THAT(merge_error(parse_config("http:\n  listen: gw.plant.example:80\n", "gw.yaml"), can_only),
+              HasSubstr("gw.yaml:2: http.listen gw.plant.example:80: 'gw.plant.example' is not an IP address"));
+}
+
+TEST(Config, MqttUriOriginIsTheFlagOrTheKey) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  EXPECT_EQ(merge(parse_config("mqtt:\n  uri: tcp://b:1883\n", "gw.yaml"), cli).mqtt.uri_origin, "gw.yaml:2: mqtt.uri");
+  cli.mqtt_uri = "tcp://c:1883";
+  EXPECT_EQ(merge(parse_config("mqtt:\n  uri: tcp://b:1883\n", "gw.yaml"), cli).mqtt.uri_origin, "--mqtt tcp://c:1883");
+}
+
+// A control character in the file is not echoed raw into the one-line
+// error (it could end the line or drive the terminal): it reads \xNN.
+TEST(Config, ControlCharactersInMessagesAreEscaped) {
+  for (const std::string& yaml : {std::string("gateway:\n  id: ab\x01" "cd\n"),
+                                 std::string("gateway:\n  id: \"ab\\x1b[2Jcd\"\n"),
+                                 std::string("networks:\n  - interface: \"can\\r0\\x7f\"\n    bitrate: 7\n")}) {
+    const auto error = config_error(yaml);
+    ASSERT_FALSE(error.empty());
+    for (const char ch : error) {
+      const auto u = static_cast<unsigned char>(ch);
+      EXPECT_TRUE(u >= 0x20 && u != 0x7F) << "raw control character " << static_cast<int>(u) << " in: " << error;
+    }
+  }
+  EXPECT_THAT(config_error("gateway:\n  id: ab\x01" "cd\n"), HasSubstr("gw.yaml:2: gateway.id: 'ab\\x01cd'"));
+  EXPECT_THAT(config_error("gateway:\n  id: \"ab\\x1b[2Jcd\"\n"), HasSubstr("'ab\\x1B[2Jcd'"));
+}
+
+// The own node-ID clash blames the flag that brought the two together.
+TEST(Config, OwnNodeIdClashBlamesTheFlag) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.eds = {{5, kEds}};
+  cli.node_id = 5;
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--eds 5=" + kEds + ": node 5 is the gateway's own node-ID on can0"));
+  CliOptions node_flag;
+  node_flag.node_id = 10;
+  EXPECT_THAT(merge_error(parse_config("networks:\n  - interface: can0\n    nodes: [{id: 10}]\n", "gw.yaml"), node_flag),
+              HasSubstr("--node-id 10: node 10 is the gateway's own node-ID on can0"));
+}
+
+// gateway.node-id is the own node-ID of networks the flags add, too.
+TEST(Config, GatewayNodeIdAppliesToNetworksFromFlags) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.demo = true;
+  const Config c = merge(parse_config("gateway: {node-id: 100}\n", "gw.yaml"), cli);
+  ASSERT_EQ(c.networks.size(), 2U);
+  EXPECT_EQ(c.networks[0].node_id, 100);
+  EXPECT_EQ(c.networks[1].node_id, 100);
+  EXPECT_EQ(merge(Config{}, cli).networks[0].node_id, 127);
 }
 
 TEST(Config, BrowserHostsOriginsAndConnectionLimits) {

@@ -57,6 +57,24 @@ TEST(EdsCheck, RefusedFileIsOneErrorLine) {
   EXPECT_THAT(missing.lines, ElementsAre("/nonexistent.eds: error: cannot open the file"));
 }
 
+// Issue 13: a control character in the file is quoted as \xNN, never raw.
+TEST(EdsCheck, ControlCharactersInTheFileAreEscaped) {
+  const auto file = (std::filesystem::path(::testing::TempDir()) / "control-chars.eds").string();
+  {
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(file.c_str(), "w"), &std::fclose);
+    ASSERT_TRUE(f);
+    std::fputs("[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\n"
+               "DefaultValue=0x12\x1b[2J\n",
+               f.get());
+  }
+  const auto r = check_file(file, 5);
+  EXPECT_FALSE(r.accepted);
+  ASSERT_EQ(r.lines.size(), 1u);
+  EXPECT_THAT(r.lines[0], StartsWith(file + ":6: error: DefaultValue '0x12\\x1B[2J'"));
+  EXPECT_EQ(r.lines[0].find('\x1b'), std::string::npos) << r.lines[0];
+  std::filesystem::remove(file);
+}
+
 // Without --node-id a file with $NODEID is still checked (node-ID 1, or a
 // DCF's own NodeID); with one, the values it gives are the node's.
 TEST(EdsCheck, NodeIdExpressionsAreCheckedWithoutANodeId) {

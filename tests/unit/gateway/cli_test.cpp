@@ -5,6 +5,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -124,6 +128,9 @@ TEST(Cli, MqttFlags) {
   EXPECT_EQ(o.mqtt_format, "protobuf");
   EXPECT_EQ(o.gateway_id, "plant-7");
   EXPECT_THAT(usage_error({"--demo", "--mqtt", "localhost:1883"}), HasSubstr("not a broker URI"));
+  // Schemes the publisher does not speak are refused here, not at start.
+  EXPECT_THAT(usage_error({"--demo", "--mqtt", "ws://broker:8080"}), HasSubstr("not a broker URI"));
+  EXPECT_EQ(parse_cli({"--demo", "--mqtt", "mqtts://broker"}).mqtt_uri, "mqtts://broker");
   EXPECT_THAT(usage_error({"--demo", "--mqtt-format", "xml"}), HasSubstr("not json or protobuf"));
   for (const char* bad : {"a/b", "a+", "#", "with space", ""}) {
     EXPECT_THAT(usage_error({"--demo", "--gateway-id", bad}), HasSubstr("--gateway-id")) << bad;
@@ -165,6 +172,14 @@ TEST(Cli, EdsNodeEqualsFileErrorsAreNamed) {
   }
 }
 
+// A control character given on the command line is not echoed raw.
+TEST(Cli, UsageErrorsEscapeControlCharacters) {
+  const std::string msg = usage_error({"--can", "can0", "--log-level", "x\x1b[2Jy"});
+  EXPECT_THAT(msg, HasSubstr("'x\\x1B[2Jy'"));
+  EXPECT_EQ(msg.find('\x1b'), std::string::npos);
+  EXPECT_THAT(usage_error({"--gateway-id", "a\nb", "--demo"}), HasSubstr("'a\\x0Ab'"));
+}
+
 TEST(Cli, UsageErrorIsOneLine) {
   const std::vector<std::vector<std::string>> bad = {
       {}, {"--can"}, {"--can", "can0", "--node-id", "0"}, {"--bogus"}, {"--can", "can0", "--log-level", "x"}};
@@ -189,6 +204,77 @@ TEST(Cli, UsageTextListsContractFlags) {
     EXPECT_THAT(u, HasSubstr(flag));
   }
   EXPECT_EQ(u.rfind("usage: canopen-gateway", 0), 0U);
+}
+
+// --help: each flag's paragraph ("  --flag ..." up to the next flag), by flag.
+std::map<std::string, std::string> help_paragraphs() {
+  std::map<std::string, std::string> out;
+  std::istringstream in(help_text());
+  std::string line, current;
+  const std::regex flag_line(R"(^  (-h, )?(--[a-z-]+))");
+  while (std::getline(in, line)) {
+    std::smatch m;
+    if (std::regex_search(line, m, flag_line)) current = m[2];
+    else if (line.empty()) current.clear();
+    if (!current.empty()) out[current] += line + "\n";
+  }
+  return out;
+}
+
+// Issue 13 item 2: --help describes every flag of the contract's command
+// line with its default (the values the contract and merge() use).
+TEST(Cli, HelpDescribesEveryContractFlagWithItsDefault) {
+  const auto p = help_paragraphs();
+  const std::map<std::string, std::string> defaults = {
+      {"--config", "Default: none"},
+      {"--can", "Default: the file's networks"},
+      {"--node-id", "else 127"},
+      {"--eds", "Default: the file's nodes"},
+      {"--mqtt", "else MQTT off"},
+      {"--mqtt-format", "else json"},
+      {"--http", "127.0.0.1:8080"},
+      {"--gateway-id", "else the host"},
+      {"--demo", "Default: off"},
+      {"--log-level", "else info"},
+  };
+  for (const auto& [flag, text] : defaults) {
+    ASSERT_TRUE(p.contains(flag)) << flag << " is not described in:\n" << help_text();
+    EXPECT_THAT(p.at(flag), HasSubstr(text)) << flag;
+  }
+  EXPECT_TRUE(p.contains("--help"));
+  EXPECT_TRUE(p.contains("--version"));
+  EXPECT_EQ(help_text().rfind(usage_text(), 0), 0U) << "starts with the synopsis";
+  EXPECT_THAT(help_text(), HasSubstr("Exit status"));
+}
+
+// The help names only flags the parser takes (the contract's --sparkplug
+// and --ascii come with later issues and are not advertised before).
+TEST(Cli, EveryFlagInTheHelpIsAccepted) {
+  const std::set<std::string> valueless = {"--demo", "--help", "--version"};
+  const std::regex flag(R"(--[a-z][a-z-]*)");
+  const std::string text = help_text();
+  std::set<std::string> seen;
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), flag); it != std::sregex_iterator(); ++it)
+    seen.insert(it->str());
+  EXPECT_GE(seen.size(), 12U);
+  const std::map<std::string, std::string> sample = {
+      {"--config", "gw.yaml"}, {"--can", "can0"},         {"--node-id", "5"},          {"--eds", "5=d.eds"},
+      {"--mqtt", "tcp://b:1883"}, {"--mqtt-format", "json"}, {"--http", "127.0.0.1:80"}, {"--gateway-id", "gw"},
+      {"--log-level", "debug"}};
+  for (const auto& f : seen) {
+    std::vector<std::string> args = {"--demo", f};
+    if (!valueless.contains(f)) {
+      ASSERT_TRUE(sample.contains(f)) << f << " is in the help but not known to this test";
+      args.push_back(sample.at(f));
+    }
+    EXPECT_NO_THROW(parse_cli(args)) << f;
+  }
+}
+
+TEST(Cli, HelpFitsEightyColumns) {
+  std::istringstream in(help_text());
+  std::string line;
+  while (std::getline(in, line)) EXPECT_LE(line.size(), 80U) << line;
 }
 
 TEST(Cli, AFlagIsNotTakenAsTheValueOfTheOneBefore) {

@@ -266,6 +266,38 @@ TEST(Logger, NewlinesInAMessageStayOnOneLine) {
   EXPECT_EQ(message_of(lines[0]), "first\\nsecond");
 }
 
+// Issue 13: input quoted in a message (a YAML value, a flag, a device's
+// string) cannot end the line or drive the terminal.
+TEST(Printable, ControlCharactersBecomeHexEscapes) {
+  EXPECT_EQ(printable("plain text: 'can0' 1017h"), "plain text: 'can0' 1017h");
+  EXPECT_EQ(printable(std::string("a\x01" "b\tc\rd\ne\x7f" "f", 11)), "a\\x01b\\x09c\\x0Dd\\x0Ae\\x7Ff");
+  EXPECT_EQ(printable("\x1b[2J"), "\\x1B[2J");
+  EXPECT_EQ(printable(std::string("nul\0here", 8)), "nul\\x00here");
+}
+
+TEST(Printable, Utf8StaysButC1ControlsAndMalformedBytesAreEscaped) {
+  EXPECT_EQ(printable("Drehzahl \xC3\xBC \xE2\x82\xAC \xF0\x9F\x98\x80"), "Drehzahl \xC3\xBC \xE2\x82\xAC \xF0\x9F\x98\x80");
+  EXPECT_EQ(printable("\xC2\x9B" "31m"), "\\xC2\\x9B31m") << "U+009B (CSI) is a control character";
+  EXPECT_EQ(printable("latin-1 \xFC"), "latin-1 \\xFC");
+  EXPECT_EQ(printable("cut \xE2\x82"), "cut \\xE2\\x82");
+  EXPECT_EQ(printable("overlong \xC0\xAF"), "overlong \\xC0\\xAF");
+  EXPECT_EQ(printable("surrogate \xED\xA0\x80"), "surrogate \\xED\\xA0\\x80");
+}
+
+TEST(Printable, IsIdempotent) {
+  const std::string once = printable(std::string("a\x01\xFF\x1b\\x41", 8));
+  EXPECT_EQ(printable(once), once);
+}
+
+TEST(Logger, ControlCharactersInAMessageAreEscaped) {
+  Capture cap;
+  Logger log(LogLevel::Info, cap.file());
+  log.warn("node name \x1b[31mred\x07");
+  const auto lines = cap.lines();
+  ASSERT_EQ(lines.size(), 1U);
+  EXPECT_EQ(message_of(lines[0]), "node name \\x1B[31mred\\x07");
+}
+
 TEST(Logger, BufferedRecordsAreWrittenWhenTheLoggerIsDestroyed) {
   Capture cap;
   {

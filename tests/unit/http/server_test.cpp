@@ -33,6 +33,7 @@
 #include <future>
 #include <optional>
 #include <random>
+#include <system_error>
 #include <thread>
 
 namespace net = boost::asio;
@@ -332,6 +333,38 @@ TEST(HttpServer, RoutesWithPathParamsAndQuery) {
   EXPECT_EQ(v.at("method"), "PUT");
   EXPECT_EQ(v.at("params").at("node"), "10");  // percent-decoded
   EXPECT_EQ(v.at("body"), R"({"value":6})");
+}
+
+// Issue 13: an address the server cannot listen on is a std::system_error
+// carrying the errno, which main.cpp words for people; what() has no Boost
+// source location or function signature.
+TEST(HttpServer, ListenFailureIsASystemErrorWithTheErrno) {
+  TestServer first(quick_config());
+  net::io_context ioc;
+  auto start_error = [&](const std::string& address, std::uint16_t port) -> std::optional<std::system_error> {
+    HttpConfig cfg = quick_config();
+    cfg.address = address;
+    cfg.port = port;
+    HttpServer s(ioc, cfg);
+    try {
+      s.start();
+    } catch (const std::system_error& e) {
+      return e;
+    }
+    return std::nullopt;
+  };
+  auto in_use = start_error("127.0.0.1", first.port());
+  ASSERT_TRUE(in_use) << "a second listener on the same port";
+  EXPECT_EQ(in_use->code(), std::errc::address_in_use);
+  EXPECT_EQ(std::string(in_use->what()), "bind: " + std::make_error_code(std::errc::address_in_use).message());
+  // 192.0.2.1 (TEST-NET-1) is no address of this machine.
+  auto foreign = start_error("192.0.2.1", 0);
+  ASSERT_TRUE(foreign);
+  EXPECT_EQ(foreign->code(), std::errc::address_not_available);
+  for (const auto& e : {*in_use, *foreign}) {
+    EXPECT_THAT(e.what(), ::testing::Not(::testing::HasSubstr("boost")));
+    EXPECT_THAT(e.what(), ::testing::Not(::testing::HasSubstr("/usr/include")));
+  }
 }
 
 TEST(HttpServer, UnknownPathIs404AndWrongMethodIs405) {

@@ -105,8 +105,8 @@ TEST(ParseSdoWrite, Errors) {
   const std::pair<const char*, const char*> cases[] = {
       {R"({"index":"1017","subIndex":0})", "value is required"},
       {R"({"index":"1017","value":null})", "value is required"},
-      {R"({"index":"1017","value":70000,"type":"u16"})", "70000 is above 65535 (u16)"},
-      {R"({"index":"1017","value":"abc","type":"u16"})", "u16"},
+      {R"({"index":"1017","value":70000,"type":"u16"})", "1017h sub 0: 70000 is above 65535 (u16)"},
+      {R"({"index":"1017","value":"abc","type":"u16"})", "1017h sub 0: \"abc\" is not an integer (u16)"},
       {R"({"value":1})", "index is required"},
       {R"({"index":"1017","value":1,"extra":2})", "unknown field \"extra\""},
   };
@@ -119,6 +119,28 @@ TEST(ParseSdoWrite, Errors) {
   auto r = parse_sdo_write(R"({"index":"1017","value":[1]})", false);
   ASSERT_TRUE(r.ok());
   EXPECT_FALSE(r->value_as(DataType::Unsigned16).ok());
+}
+
+// Issue 13: every range or type error of an SDO value names the object
+// (the od's object_label) and the type, whatever the type came from (the
+// request, or the EDS when App calls value_as).
+TEST(ParseSdoWrite, ValueErrorsNameTheObjectAndTheType) {
+  auto r = parse_sdo_write(R"({"index":"0x6040","subIndex":0,"value":70000})", false);
+  ASSERT_TRUE(r.ok()) << r.error().detail;
+  const std::pair<canopen::DataType, const char*> cases[] = {
+      {DataType::Unsigned16, "6040h sub 0: 70000 is above 65535 (u16)"},
+      {DataType::Integer8, "6040h sub 0: 70000 is above 127 (i8)"},
+      {DataType::Boolean, "6040h sub 0: 70000 is not a boolean"},
+  };
+  for (const auto& [type, expect] : cases) {
+    auto v = r->value_as(type);
+    ASSERT_FALSE(v.ok());
+    EXPECT_EQ(v.error().detail.rfind(expect, 0), 0U) << v.error().detail;
+  }
+  r = parse_sdo_write(R"({"index":"2000","subIndex":"0x1F","value":-1})", false);
+  ASSERT_TRUE(r.ok());
+  EXPECT_EQ(r->value_as(DataType::Unsigned32).error().detail, "2000h sub 31: -1 is below 0 (u32)");
+  EXPECT_EQ(r->value_as(DataType::Unsigned32).error().code, canopen::make_error_code(canopen::SdoAbort::ValueTooLow));
 }
 
 TEST(ParseRequests, Protobuf) {

@@ -137,6 +137,33 @@ TEST(Rest, SdoReadWriteRoundTripAndErrors) {
   EXPECT_EQ(rig.request("GET", "/api/v1/networks/2/nodes/5/sdo/1000/0").status, 404);
 }
 
+// Issue 13: a value refused for its type or the EDS limits names the object
+// and the type, whether the type came from the EDS or the request, for SDO
+// writes and RPDO values alike; nothing goes on the bus.
+TEST(Rest, ValueErrorsNameTheObjectAndTheType) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
+  auto detail = [&](const std::string& method, const std::string& path, const std::string& body) {
+    auto r = rig.request(method, path, body);
+    EXPECT_EQ(r.status, 400) << r.body;
+    if (r.status != 400) return std::string();
+    return std::string(r.json().as_object().at("detail").as_string());
+  };
+  // The type from the EDS (6060h is i8 there).
+  EXPECT_EQ(detail("PUT", kNode5 + "/sdo/6060/0", R"({"value": 300})"), "6060h sub 0: 300 is above 127 (i8)");
+  EXPECT_THAT(detail("PUT", kNode5 + "/sdo/6060/0", R"({"value": -3})"),
+              ::testing::StartsWith("6060h sub 0: -3 is below the low limit"));
+  EXPECT_THAT(detail("PUT", kNode5 + "/sdo/6060/0", R"({"value": -3})"), HasSubstr("(i8)"));
+  // The type from the request.
+  EXPECT_EQ(detail("PUT", kNode5 + "/sdo/2000/0?type=u16", R"({"value": 70000})"),
+            "2000h sub 0: 70000 is above 65535 (u16)");
+  EXPECT_EQ(detail("PUT", kNode5 + "/sdo/1017/0", R"({"value": 70000, "type": "u16"})"),
+            "1017h sub 0: 70000 is above 65535 (u16)");
+  // An RPDO's mapped value (6040h, the Controlword, u16).
+  EXPECT_EQ(detail("PUT", kNode5 + "/rpdo/1", R"({"values": [{"index": "0x6040", "value": 70000}]})"),
+            "6040h sub 0: 70000 is above 65535 (u16)");
+}
+
 TEST(Rest, SdoTimeoutIs504) {
   RestRig rig;
   auto r = rig.request("GET", "/api/v1/networks/1/nodes/42/sdo/1000/0?type=u32");

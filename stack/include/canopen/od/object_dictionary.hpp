@@ -35,6 +35,8 @@ enum class Access : std::uint8_t { ReadOnly, WriteOnly, ReadWrite, ReadWriteRead
 
 std::string_view to_string(ObjectCode c);  // "VAR", "ARRAY", ...
 std::string_view to_string(Access a);      // "ro", "wo", "rw", "rwr", "rww", "const"
+// How messages name an object: "1018h sub 2".
+std::string object_label(std::uint16_t index, std::uint8_t sub);
 // EDS spellings, case-insensitive: ro wo rw rwr rww const.
 std::optional<Access> parse_access(std::string_view s);
 inline bool readable(Access a) { return a != Access::WriteOnly; }
