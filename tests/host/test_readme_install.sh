@@ -18,8 +18,8 @@ TMPDIR=$(mktemp -d /tmp/readme-test.XXXXXX)
 export TMPDIR
 MOSQ_PID=
 cleanup() {
-  [ -n "${GW_PID:-}" ] && kill "$GW_PID" 2>/dev/null
-  [ -n "$MOSQ_PID" ] && kill "$MOSQ_PID" 2>/dev/null
+  [ -z "${GW_PID:-}" ] || kill "$GW_PID" 2>/dev/null || true
+  [ -z "$MOSQ_PID" ] || kill "$MOSQ_PID" 2>/dev/null || true
   rm -rf "$TMPDIR"
 }
 trap cleanup EXIT
@@ -111,7 +111,7 @@ kill -0 "$GW_PID" 2>/dev/null || fail "the service is not running"
 $BLOCKS run "$README" install-check \
   --sub "systemctl status canopen-gateway=kill -0 $GW_PID" --sub "127.0.0.1:8080=127.0.0.1:$PORT" ||
   fail "the README's check of the installed service"
-stop_gateway
+stop_gateway; GW_PID=
 pass "the installed service stopped cleanly"
 
 # ---- the tour, against the installed programs --------------------------------
@@ -140,7 +140,7 @@ for name in $(grep -o '<!-- readme-test: tour-[a-z0-9-]*' "$README" | sed 's/.*:
   ran=$((ran + 1))
 done
 [ "$ran" -ge 5 ] || fail "only $ran tour blocks found in the README"
-stop_gateway
+stop_gateway; GW_PID=
 pass "tour: $ran blocks as the README shows"
 
 # ---- every flag of --help is documented --------------------------------------
