@@ -24,26 +24,19 @@ cleanup() {
 }
 trap cleanup EXIT
 . "$(dirname "$0")/../system/lib.sh"
+. "$(dirname "$0")/../system/installed.sh"   # free_port, AS_SERVICE, service_state_dir, unit_command
 : "${SOURCE_DIR:?}"
 README=$SOURCE_DIR/README.md
 BLOCKS="/usr/bin/python3 $SOURCE_DIR/tests/host/readme_blocks.py"
 R=$T/root                     # stands for /
 chmod 755 "$T"                # the service's user reads the installation
 
-free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 PORT=$(free_port)
 MQTT_PORT=$(free_port)
 printf 'listener %s 127.0.0.1\nallow_anonymous true\npersistence false\n' "$MQTT_PORT" > "$T/mosquitto.conf"
 /usr/sbin/mosquitto -c "$T/mosquitto.conf" > "$T/mosquitto.log" 2>&1 &
 MOSQ_PID=$!
 wait_for "$T/mosquitto.log" "mosquitto version .* running" 10
-
-# As the unit runs the gateway: a user without capabilities (User=,
-# CapabilityBoundingSet=, NoNewPrivileges=). As a non-root tester: as is.
-AS_SERVICE=
-if [ "$(id -u)" -eq 0 ]; then
-  AS_SERVICE="setpriv --reuid=65534 --regid=65534 --clear-groups --inh-caps=-all --bounding-set=-all --no-new-privs --"
-fi
 
 # ---- "From source": the build block names what this test's build is --------
 $BLOCKS block "$README" install-build > "$T/build.sh" || fail "README: no install-build block"
@@ -64,13 +57,12 @@ grep -q '"binaryDir": "${sourceDir}/build"' "$SOURCE_DIR/CMakePresets.json" ||
 start_service() {
   UNIT=$R/usr/local/lib/systemd/system/canopen-gateway.service
   [ -f "$UNIT" ] || fail "systemctl enable: no unit at $UNIT"
-  CMD=$(sed -n 's/^ExecStart=//p' "$UNIT" | sed "s| /etc/| $R/etc/|g")
+  CMD=$(unit_command "$UNIT" "$R")
   [ -n "$CMD" ] || fail "the unit has no ExecStart"
-  mkdir -p "$R/var/lib/canopen-gateway"
-  [ "$(id -u)" -ne 0 ] || chown 65534:65534 "$R/var/lib/canopen-gateway"
+  service_state_dir "$R/var/lib/canopen-gateway"
   export STATE_DIRECTORY=$R/var/lib/canopen-gateway
   GW_LOG=$T/service.log
-  # shellcheck disable=SC2086 # the unit's command line, split as systemd does
+  # shellcheck disable=SC2086 # the unit's command line, split as systemd does; as its user
   $AS_SERVICE $CMD --http "127.0.0.1:$PORT" --mqtt "tcp://127.0.0.1:$MQTT_PORT" > "$GW_LOG" 2>&1 &
   GW_PID=$!
   wait_for "$GW_LOG" "canopen-gateway started" 20
