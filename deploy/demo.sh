@@ -34,9 +34,11 @@ cat <<TXT
   API description:         http://127.0.0.1:8080/api/v1/openapi.json
   Live MQTT events:        mosquitto_sub -h 127.0.0.1 -v -t 'canopen/#'
   WebSocket events:        ws://127.0.0.1:8080/api/v1/events
-  SDO read over MQTT:      mosquitto_pub -h 127.0.0.1 -t canopen/demo/1/5/sdo/read \\
-                             -m '{"index":"0x1018","subIndex":1,"replyTo":"demo/reply","correlationId":"1"}'
+  SDO read over MQTT:      first, in another terminal, subscribe to the reply topic:
                            mosquitto_sub -h 127.0.0.1 -v -t demo/reply
+                           then send the request:
+                           mosquitto_pub -h 127.0.0.1 -t canopen/demo/1/5/sdo/read \\
+                             -m '{"index":"0x1018","subIndex":1,"replyTo":"demo/reply","correlationId":"1"}'
   Stop with Ctrl-C.
 
 TXT
