@@ -900,7 +900,8 @@ std::error_code check_limits(const Value& v, const std::optional<Value>& low, co
       auto c = compare(*n, *l);
       if (!c)
         return fail(SdoAbort::InvalidValue,
-                    format_value(v) + " cannot be compared with the low limit " + format_value(*low));
+                    format_value(v) + " cannot be compared with the low limit " + format_value(*low) +
+                        " (" + type_label(v.type) + ")");
       if (*c < 0) {
         return fail(SdoAbort::ValueTooLow, format_value(v) + " is below the low limit " + format_value(*low) + " (" +
                                                type_label(v.type) + ")");
@@ -912,7 +913,8 @@ std::error_code check_limits(const Value& v, const std::optional<Value>& low, co
       auto c = compare(*n, *h);
       if (!c)
         return fail(SdoAbort::InvalidValue,
-                    format_value(v) + " cannot be compared with the high limit " + format_value(*high));
+                    format_value(v) + " cannot be compared with the high limit " + format_value(*high) +
+                        " (" + type_label(v.type) + ")");
       if (*c > 0) {
         return fail(SdoAbort::ValueTooHigh, format_value(v) + " is above the high limit " + format_value(*high) + " (" +
                                                 type_label(v.type) + ")");

@@ -687,8 +687,11 @@ TEST(CheckLimits, RealsAndIntegers) {
   EXPECT_EQ(limits(Value::of_real64(-std::numeric_limits<double>::infinity()), Value::of_signed(DataType::Integer8, -5),
                    std::nullopt),
             code(SdoAbort::ValueTooLow));
-  EXPECT_EQ(limits(Value::of_real32(std::numeric_limits<float>::quiet_NaN()), Value::of_real32(0.0f), std::nullopt),
+  std::string detail;
+  EXPECT_EQ(limits(Value::of_real32(std::numeric_limits<float>::quiet_NaN()), Value::of_real32(0.0f), std::nullopt,
+                   &detail),
             code(SdoAbort::InvalidValue));
+  EXPECT_EQ(detail, "nan cannot be compared with the low limit 0 (r32)");  // names the type like every range error
 }
 
 TEST(CheckLimits, NonNumericValuesAreNotChecked) {
