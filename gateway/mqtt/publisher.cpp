@@ -404,6 +404,27 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     if (conn) conn->flush();  // status and SUBSCRIBE when the queue is empty
   }
 
+  // The QoS a message goes out with: the broker's Maximum QoS caps QoS 1.
+  std::uint8_t out_qos(std::uint8_t qos) const { return qos == 0 ? 0 : max_qos; }
+
+  // Appends one PUBLISH to `out` as the broker allows it: `qos` as from
+  // out_qos() (with `pid`, the caller's packet id, when it is 1), the retain
+  // flag only where Retain Available, properties only under MQTT 5, and
+  // PacketTooLarge above the broker's Maximum Packet Size. The caller
+  // records the packet id in pid_slot once this returned None.
+  codec::Error encode_out(std::string& out, std::string_view topic, std::string_view payload, std::uint8_t qos,
+                          bool retain, std::uint16_t pid, const codec::PublishProperties* props = nullptr) const {
+    codec::Publish p;
+    p.topic = topic;
+    p.payload = payload;
+    p.qos = qos;
+    p.retain = retain && retain_available;
+    p.packet_id = qos > 0 ? pid : 0;
+    if (props && version == codec::kMqtt5) p.props = *props;
+    if (max_packet > 0 && codec::publish_size(version, p) > max_packet) return codec::Error::PacketTooLarge;
+    return codec::encode_publish(out, version, p);
+  }
+
   // A QoS 1 PUBLISH outside the queue (status, replies). False when it
   // could not be encoded.
   bool send_control(std::string_view topic, std::string_view payload, bool retain,
@@ -411,16 +432,9 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     if (!conn) return false;
     const std::uint16_t pid = alloc_pid();
     if (pid == 0) return false;
-    codec::Publish p;
-    p.topic = topic;
-    p.payload = payload;
-    p.qos = max_qos;
-    p.retain = retain && retain_available;
-    p.packet_id = p.qos > 0 ? pid : 0;
-    if (props && version == codec::kMqtt5) p.props = *props;
-    if (max_packet > 0 && codec::publish_size(version, p) > max_packet) return false;
-    if (codec::encode_publish(conn->out(), version, p) != codec::Error::None) return false;
-    if (p.qos > 0) pid_slot[pid] = kControlPid;
+    const std::uint8_t qos = out_qos(1);
+    if (encode_out(conn->out(), topic, payload, qos, retain, pid, props) != codec::Error::None) return false;
+    if (qos > 0) pid_slot[pid] = kControlPid;
     return true;
   }
 
@@ -542,23 +556,13 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     for (;;) {
       bool any = false;
       while (connected && inflight_q1 < limit && queue.next(item)) {
-        codec::Publish p;
-        p.topic = item.msg.topic;
-        p.payload = item.msg.payload;
-        p.qos = item.msg.qos == 0 ? 0 : max_qos;
-        p.retain = item.msg.retained && retain_available;
-        if (p.qos > 0) {
-          p.packet_id = alloc_pid();
-          if (p.packet_id == 0) {  // cannot happen with a window < 65535
-            queue.rewind_to(item.seq);
-            break;
-          }
+        const std::uint8_t qos = out_qos(item.msg.qos);
+        std::uint16_t pid = 0;
+        if (qos > 0 && (pid = alloc_pid()) == 0) {  // cannot happen with a window < 65535
+          queue.rewind_to(item.seq);
+          break;
         }
-        codec::Error e = codec::Error::None;
-        if (max_packet > 0 && codec::publish_size(version, p) > max_packet)
-          e = codec::Error::PacketTooLarge;
-        else
-          e = codec::encode_publish(conn->out(), version, p);
+        const codec::Error e = encode_out(conn->out(), item.msg.topic, item.msg.payload, qos, item.msg.retained, pid);
         if (e != codec::Error::None) {
           // This very message cannot be sent (bad topic, too large): drop it
           // rather than block the queue forever.
@@ -567,8 +571,8 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
           log.warn("mqtt: dropping message to '" + item.msg.topic + "': " + codec::to_string(e));
           continue;
         }
-        if (p.qos > 0) {
-          pid_slot[p.packet_id] = item.seq;
+        if (qos > 0) {
+          pid_slot[pid] = item.seq;
           ++inflight_q1;
         } else {
           unwritten_q0.push_back(item.seq);
@@ -814,34 +818,25 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
       flush_queue();
       std::vector<std::uint64_t> tail_q0;  // leave the queue once written, as in on_drained()
       while (inflight_q1 < window() && scratch.size() < kMaxBuffered && queue.next(item)) {
-        codec::Publish p;
-        p.topic = item.msg.topic;
-        p.payload = item.msg.payload;
-        p.qos = item.msg.qos == 0 ? 0 : max_qos;
-        p.retain = item.msg.retained && retain_available;
-        if (p.qos > 0 && (p.packet_id = alloc_pid()) == 0) break;
-        if (max_packet > 0 && codec::publish_size(version, p) > max_packet) continue;  // drain() drops it
-        if (codec::encode_publish(scratch, version, p) != codec::Error::None) continue;
-        if (p.qos > 0) {
-          pid_slot[p.packet_id] = item.seq;
+        const std::uint8_t qos = out_qos(item.msg.qos);
+        std::uint16_t pid = 0;
+        if (qos > 0 && (pid = alloc_pid()) == 0) break;
+        // Not encodable: left queued; the next run's drain() drops it.
+        if (encode_out(scratch, item.msg.topic, item.msg.payload, qos, item.msg.retained, pid) != codec::Error::None)
+          continue;
+        if (qos > 0) {
+          pid_slot[pid] = item.seq;
           ++inflight_q1;
         } else {
           tail_q0.push_back(item.seq);
         }
         ++counters.sent;
       }
+      // The last messages' PUBACKs are never awaited: any id will do.
       auto add = [&](std::string_view topic, std::string_view payload, std::uint8_t qos, bool retain) {
-        codec::Publish p;
-        p.topic = topic;
-        p.payload = payload;
-        p.qos = qos == 0 ? 0 : max_qos;
-        p.retain = retain && retain_available;
-        if (p.qos > 0) {
-          const std::uint16_t pid = alloc_pid();
-          p.packet_id = pid == 0 ? 1 : pid;
-        }
-        if (max_packet > 0 && codec::publish_size(version, p) > max_packet) return;
-        (void)codec::encode_publish(scratch, version, p);
+        const std::uint8_t q = out_qos(qos);
+        const std::uint16_t pid = q > 0 ? alloc_pid() : 0;
+        (void)encode_out(scratch, topic, payload, q, retain, pid == 0 ? 1 : pid);
       };
       for (const auto& m : last.messages) add(m.topic, m.payload, m.qos, m.retained);
       add(status_topic(), last.offline_payload.empty() ? cfg.offline_payload : last.offline_payload, 1, true);
