@@ -3,6 +3,8 @@
 #include <chrono>
 #include <ctime>
 
+#include "canopen/types.hpp"
+
 namespace gateway {
 
 std::optional<LogLevel> parse_log_level(std::string_view s) {
@@ -17,31 +19,12 @@ std::optional<LogLevel> parse_log_level(std::string_view s) {
 namespace {
 
 // Length of the UTF-8 sequence at s[i] that printable() keeps, 0 when the
-// byte must be escaped (control, C1 control, malformed, overlong, surrogate).
+// byte must be escaped (malformed, overlong or surrogate UTF-8, or a C0/C1
+// control or DEL).
 std::size_t kept_length(std::string_view s, std::size_t i) {
-  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
-  const unsigned c = b(i);
-  if (c < 0x20 || c == 0x7F) return 0;
-  if (c < 0x80) return 1;
-  std::size_t n = 0;
-  unsigned lo = 0x80, hi = 0xBF;  // allowed range of the second byte
-  if (c >= 0xC2 && c <= 0xDF) {
-    n = 2;
-    if (c == 0xC2) lo = 0xA0;  // U+0080..U+009F: C1 controls
-  } else if (c >= 0xE0 && c <= 0xEF) {
-    n = 3;
-    if (c == 0xE0) lo = 0xA0;
-    if (c == 0xED) hi = 0x9F;
-  } else if (c >= 0xF0 && c <= 0xF4) {
-    n = 4;
-    if (c == 0xF0) lo = 0x90;
-    if (c == 0xF4) hi = 0x8F;
-  } else {
-    return 0;
-  }
-  if (i + n > s.size() || b(i + 1) < lo || b(i + 1) > hi) return 0;
-  for (std::size_t k = 2; k < n; ++k)
-    if (b(i + k) < 0x80 || b(i + k) > 0xBF) return 0;
+  char32_t cp = 0;
+  const std::size_t n = canopen::utf8_sequence(s, i, &cp);
+  if (n == 0 || cp < 0x20 || (cp >= 0x7F && cp <= 0x9F)) return 0;
   return n;
 }
 

@@ -171,40 +171,6 @@ std::string utf16_to_utf8(const std::u16string& s) {
   return out;
 }
 
-// Length of the well-formed UTF-8 sequence at s[i] (no overlongs,
-// surrogates or code points above U+10FFFF) with its code point in *cp; 0
-// when it is malformed.
-std::size_t utf8_sequence(std::string_view s, std::size_t i, char32_t* cp_out) {
-  const auto b0 = static_cast<unsigned char>(s[i]);
-  if (b0 < 0x80) {
-    *cp_out = b0;
-    return 1;
-  }
-  std::size_t n = 0;
-  char32_t cp = 0;
-  if ((b0 & 0xE0) == 0xC0) {
-    n = 2;
-    cp = b0 & 0x1Fu;
-  } else if ((b0 & 0xF0) == 0xE0) {
-    n = 3;
-    cp = b0 & 0x0Fu;
-  } else if ((b0 & 0xF8) == 0xF0) {
-    n = 4;
-    cp = b0 & 0x07u;
-  } else {
-    return 0;
-  }
-  if (i + n > s.size()) return 0;
-  for (std::size_t k = 1; k < n; ++k) {
-    const auto b = static_cast<unsigned char>(s[i + k]);
-    if ((b & 0xC0) != 0x80) return 0;
-    cp = (cp << 6) | (b & 0x3Fu);
-  }
-  constexpr std::array<char32_t, 5> kMin = {0, 0, 0x80, 0x800, 0x10000};
-  if (cp < kMin[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
-  *cp_out = cp;
-  return n;
-}
 
 // Strict UTF-8 decoding (no overlongs, no surrogates); nullopt if invalid.
 std::optional<std::u16string> utf8_to_utf16(std::string_view s) {
@@ -936,6 +902,39 @@ TimeOfDay time_of_day_from_unix_ms(std::int64_t unix_ms) {
 }
 
 std::int64_t unix_ms_from_time_of_day(const TimeOfDay& t) { return (kEpoch1984Days + t.days) * kMsPerDay + t.ms; }
+
+// No overlongs, surrogates or code points above U+10FFFF.
+std::size_t utf8_sequence(std::string_view s, std::size_t i, char32_t* cp_out) {
+  const auto b0 = static_cast<unsigned char>(s[i]);
+  if (b0 < 0x80) {
+    *cp_out = b0;
+    return 1;
+  }
+  std::size_t n = 0;
+  char32_t cp = 0;
+  if ((b0 & 0xE0) == 0xC0) {
+    n = 2;
+    cp = b0 & 0x1Fu;
+  } else if ((b0 & 0xF0) == 0xE0) {
+    n = 3;
+    cp = b0 & 0x0Fu;
+  } else if ((b0 & 0xF8) == 0xF0) {
+    n = 4;
+    cp = b0 & 0x07u;
+  } else {
+    return 0;
+  }
+  if (i + n > s.size()) return 0;
+  for (std::size_t k = 1; k < n; ++k) {
+    const auto b = static_cast<unsigned char>(s[i + k]);
+    if ((b & 0xC0) != 0x80) return 0;
+    cp = (cp << 6) | (b & 0x3Fu);
+  }
+  constexpr std::array<char32_t, 5> kMin = {0, 0, 0x80, 0x800, 0x10000};
+  if (cp < kMin[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
+  *cp_out = cp;
+  return n;
+}
 
 bool is_utf8(std::string_view s) {
   for (std::size_t i = 0; i < s.size();) {

@@ -143,6 +143,9 @@ std::string format_value(const Value& v);
 // True when s is well-formed UTF-8 (no overlongs, surrogates or code
 // points above U+10FFFF). Does not allocate.
 bool is_utf8(std::string_view s);
+// Length of the well-formed UTF-8 sequence at s[i] (i < s.size()), its code
+// point in *cp; 0 when the bytes there are not one (as is_utf8 judges).
+std::size_t utf8_sequence(std::string_view s, std::size_t i, char32_t* cp);
 // Bytes read as Latin-1 (ISO 8859-1), written as UTF-8: how text that is not
 // valid UTF-8 (vendor files, device strings) is turned into valid JSON and
 // protobuf strings. Callers check for valid UTF-8 first and keep such text
