@@ -35,17 +35,6 @@ std::string_view strip_bearer(std::string_view v) {
   return v;
 }
 
-std::vector<std::string_view> split(std::string_view s, char sep) {
-  std::vector<std::string_view> out;
-  std::size_t start = 0;
-  for (;;) {
-    auto pos = s.find(sep, start);
-    out.push_back(s.substr(start, pos == std::string_view::npos ? std::string_view::npos : pos - start));
-    if (pos == std::string_view::npos) return out;
-    start = pos + 1;
-  }
-}
-
 template <class T>
 bool parse_decimal(std::string_view s, T& out) {
   if (s.empty()) return false;
@@ -384,8 +373,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     // The online status before the backlog, then the request subscriptions.
     send_control(status_topic(), cfg.online_payload, true, nullptr);
     if (cfg.accept_requests) {
-      const std::string base = "canopen/" + cfg.gateway_id;
-      const std::string filters[] = {base + "/+/+/sdo/read", base + "/+/+/sdo/write", base + "/+/+/nmt"};
+      const auto filters = request_filters(cfg.gateway_id);
       // MQTT 5: no local, so the gateway's own replies are not echoed.
       const codec::Subscription subs[] = {{filters[0], 1, true}, {filters[1], 1, true}, {filters[2], 1, true}};
       if (const std::uint16_t pid = alloc_pid(); pid != 0) {
@@ -726,7 +714,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl> {
     if (topic.rfind(prefix, 0) != 0) {
       error = "not this gateway's request topic";
     } else {
-      auto parts = split(std::string_view(topic).substr(prefix.size()), '/');
+      auto parts = topic_levels(std::string_view(topic).substr(prefix.size()));
       unsigned node = 0;
       if (parts.size() == 4 && parts[2] == "sdo" && parts[3] == "read") {
         req.kind = RequestKind::SdoRead;

@@ -8,11 +8,20 @@
 // Pure functions; thread-safe.
 #pragma once
 
+#include <array>
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace gateway::mqtt {
+
+// The levels of a topic name or filter ("a//b" -> "a", "", "b").
+std::vector<std::string_view> topic_levels(std::string_view topic);
+
+// The filters the gateway `gateway_id` subscribes to for requests:
+// canopen/<gw>/+/+/sdo/read, canopen/<gw>/+/+/sdo/write, canopen/<gw>/+/+/nmt.
+std::array<std::string, 3> request_filters(std::string_view gateway_id);
 
 // Why `filter` is not a valid topic filter: empty, not UTF-8 (or U+0000),
 // over 65535 bytes, '#' not alone in the last level, '+' not alone in its
