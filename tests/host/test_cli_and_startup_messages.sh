@@ -15,8 +15,6 @@ trap 'kill $GW_PID $HOLD_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
 . "$(dirname "$0")/../system/lib.sh"
 : "${SOURCE_DIR:?}"
 HOLD_PID=
-free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
-
 # run_gateway ARGS...: runs it to its end; $T/out, $T/err, $RC.
 run_gateway() {
   RC=0

@@ -14,7 +14,7 @@ export TMPDIR
 trap 'kill $MOSQ_PID $SUB_PID $GW_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
 . "$(dirname "$0")/../system/lib.sh"
 GW=gw1
-MOSQ_PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
+MOSQ_PORT=$(free_port)
 PERSIST=$T/mosquitto-db
 mkdir -p "$PERSIST"
 start_mosquitto "$PERSIST"

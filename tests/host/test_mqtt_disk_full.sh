@@ -27,7 +27,6 @@ if ! mount -t tmpfs -o size=3m tmpfs "$STATE" 2>/dev/null; then
   exit 0
 fi
 GW=gwfull
-free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 MOSQ_PORT=$(free_port)
 HTTP_PORT=$(free_port)
 PERSIST=$T/mosquitto-db

@@ -24,7 +24,7 @@ cleanup() {
 }
 trap cleanup EXIT
 . "$(dirname "$0")/../system/lib.sh"
-. "$(dirname "$0")/../system/installed.sh"   # free_port, AS_SERVICE, service_state_dir, unit_command
+. "$(dirname "$0")/../system/installed.sh"   # AS_SERVICE, service_state_dir, unit_command
 : "${SOURCE_DIR:?}"
 README=$SOURCE_DIR/README.md
 BLOCKS="/usr/bin/python3 $SOURCE_DIR/tests/host/readme_blocks.py"

@@ -13,7 +13,6 @@ export TMPDIR
 trap 'kill $MOSQ_PID $SUB_PID $GW_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
 . "$(dirname "$0")/../system/lib.sh"
 GW=gw-restart
-free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 listening() { /usr/bin/python3 -c 'import socket,sys; s=socket.socket(); sys.exit(s.connect_ex(("127.0.0.1",int(sys.argv[1]))))' "$1"; }
 http_status() {
   /usr/bin/python3 - "$@" <<'PY'

@@ -3,8 +3,6 @@
 # configuration on can0: test_installed_example_on_can0.sh), started the way
 # its systemd unit starts it. Sourced after tests/system/lib.sh; uses $T.
 
-free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
-
 # $AS_SERVICE CMD...: CMD as the unit runs it, a user without capabilities
 # or a way to gain them (User=, CapabilityBoundingSet=, NoNewPrivileges=):
 # the installed files must be readable by another user, CAN and the

@@ -83,6 +83,9 @@ start_candump() {
   fail "candump on $iface did not start"
 }
 
+# free_port: a TCP port on 127.0.0.1 that nobody listens on now.
+free_port() { /usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
+
 # ---- MQTT (a real mosquitto on loopback inside the UML kernel) -------------
 SIM=$BUILD_DIR/gateway/canopen-sim
 EDS_DIR=${SOURCE_DIR:-$(dirname "$0")/../..}/deploy/eds
