@@ -881,7 +881,7 @@ void MqttPublisher::publish(const EncodedEventPtr& ev, PayloadFormat format) {
   const auto k = static_cast<std::size_t>(ev->kind);
   const bool known = k < kEventKindCount;
   impl_->publish(ev->topic, format == PayloadFormat::Json ? ev->json : ev->binary, known ? impl_->cfg.qos[k] : 1,
-                 ev->retained, known ? impl_->cfg.storage[k] : StorageMode::Disk);
+                 ev->retained, known ? impl_->cfg.storage_for(ev->kind) : StorageMode::Disk);
 }
 
 void MqttPublisher::publish(const QueuedMessage& m) {
