@@ -2,7 +2,11 @@
 // OutboundQueue (a bounded memory tier and a crash-safe DiskQueue) and takes
 // SDO/NMT requests (../shared/api-contract.md).
 //
-// Settings: MqttConfig (mqtt_config.hpp).
+// Settings: MqttConfig (mqtt_config.hpp). The MQTT protocol (CONNECT and
+// CONNACK, packet ids, the in-flight window, keepalive, the fallback to
+// 3.1.1, the broker's limits) is the sans-I/O Session (session.hpp); the
+// publisher is its Asio adapter: the socket (mqtt_connection.hpp), the
+// timers, the reconnect backoff, the queue and its storage, and requests.
 //
 // Storage: each event kind has a StorageMode (MqttConfig::storage_for;
 // outbound_queue.hpp). `disk` (default for QoS 1 kinds): written to the
