@@ -53,7 +53,7 @@ void print_error(const std::string& msg) {
 void check_mqtt_uri(const gateway::Config& c) {
   if (!c.mqtt.enabled) return;
   try {
-    (void)gateway::mqtt::parse_endpoint(gateway::mqtt::normalize_server_uri(c.mqtt.uri));
+    (void)gateway::mqtt::parse_endpoint(gateway::mqtt::normalize_server_uri(c.mqtt.server_uri));
   } catch (const std::invalid_argument& e) {
     throw gateway::ConfigError(c.mqtt.uri_origin + ": " + e.what());
   }
@@ -130,16 +130,9 @@ int run(const gateway::CliOptions& opts) {
     return kExitCanUnavailable;
   }
 
-  gateway::http::HttpConfig http_cfg;
-  http_cfg.address = config.http.address;
-  http_cfg.port = config.http.port;
-  http_cfg.cert_file = config.http.cert_file;
-  http_cfg.key_file = config.http.key_file;
-  http_cfg.host_names = config.http.host_names;
-  http_cfg.allowed_origins = config.http.allowed_origins;
-  http_cfg.max_connections = config.http.max_connections;
-  http_cfg.max_connections_per_address = config.http.max_connections_per_address;
-  http_cfg.static_dir = config.http.web_root.empty() ? default_web_root() : std::filesystem::path(config.http.web_root);
+  // The server's part of the configuration, as parsed.
+  gateway::http::HttpConfig http_cfg = config.http;
+  if (http_cfg.static_dir.empty()) http_cfg.static_dir = default_web_root();
   if (http_cfg.static_dir.empty()) log.warn("http: no dashboard files found; set http.web-root");
   std::unique_ptr<gateway::http::HttpServer> http;
   try {

@@ -541,29 +541,9 @@ void App::start() {
 
 void App::start_mqtt() {
   mqtt_ = std::make_unique<Mqtt>();
-  mqtt::MqttConfig mc;
-  mc.server_uri = config_.mqtt.uri;
-  mc.client_id = config_.mqtt.client_id;
-  mc.username = config_.mqtt.username;
-  mc.password = config_.mqtt.password;
-  mc.ca_file = config_.mqtt.ca_file;
-  mc.cert_file = config_.mqtt.cert_file;
-  mc.key_file = config_.mqtt.key_file;
+  // The publisher's settings as parsed; the rest is known only now.
+  mqtt::MqttConfig mc = config_.mqtt;
   mc.gateway_id = config_.gateway_id;
-  mc.format = config_.mqtt.format == PayloadFormat::Protobuf ? mqtt::PayloadFormat::Protobuf : mqtt::PayloadFormat::Json;
-  for (std::size_t k = 0; k < mc.qos.size(); ++k) {
-    mc.qos[k] = static_cast<std::uint8_t>(config_.mqtt.qos_for(static_cast<EventKind>(k)));
-    const auto mode = config_.mqtt.storage_for(static_cast<EventKind>(k));
-    mc.storage[k] = mode == StorageMode::Disk     ? mqtt::StorageMode::Disk
-                    : mode == StorageMode::Outage ? mqtt::StorageMode::Outage
-                                                  : mqtt::StorageMode::Memory;
-  }
-  mc.queue.dir = config_.mqtt.queue_dir;
-  mc.queue.max_bytes = config_.mqtt.queue_max_bytes;
-  mc.queue.max_messages = config_.mqtt.queue_max_messages;
-  mc.reply_topics = config_.mqtt.reply_topics;
-  mc.memory_max_bytes = config_.mqtt.memory_max_bytes;
-  mc.memory_max_messages = config_.mqtt.memory_max_messages;
   // The Will is fixed at start: it carries the start time and uptime 0
   // (the broker publishes it when it notices the loss; only a clean stop
   // knows when it went offline).
@@ -597,7 +577,7 @@ void App::start_mqtt() {
   });
   pub->start();
   // Where to look, for a person: the broker and the topics to subscribe to.
-  log_.info("MQTT: broker " + config_.mqtt.uri + ", topic prefix canopen/" + config_.gateway_id + "/ (subscribe to canopen/" +
+  log_.info("MQTT: broker " + config_.mqtt.server_uri + ", topic prefix canopen/" + config_.gateway_id + "/ (subscribe to canopen/" +
             config_.gateway_id + "/#)");
 }
 

@@ -252,7 +252,7 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
                 "heartbeat-min-interval-ms", "queue", "requests-role", "reply-topics"});
   auto uri = a.get("uri");
   if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
-  m.uri = uri->str();
+  m.server_uri = uri->str();
   m.uri_origin = uri->where();
   m.enabled = true;
   if (auto v = a.get("client-id")) m.client_id = v->str();
@@ -301,9 +301,9 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   if (auto v = a.get("heartbeat-min-interval-ms")) m.heartbeat_min_interval = ms(*v, 3'600'000);
   if (auto q = a.get("queue")) {
     q->expect_map({"dir", "max-bytes", "max-messages", "memory-max-bytes", "memory-max-messages", "storage"});
-    if (auto v = q->get("dir")) m.queue_dir = resolve(dir, v->str());
-    if (auto v = q->get("max-bytes")) m.queue_max_bytes = v->integer(1 << 16, 1ULL << 40);
-    if (auto v = q->get("max-messages")) m.queue_max_messages = v->integer(16, 1ULL << 32);
+    if (auto v = q->get("dir")) m.queue.dir = resolve(dir, v->str());
+    if (auto v = q->get("max-bytes")) m.queue.max_bytes = v->integer(1 << 16, 1ULL << 40);
+    if (auto v = q->get("max-messages")) m.queue.max_messages = v->integer(16, 1ULL << 32);
     if (auto v = q->get("memory-max-bytes")) m.memory_max_bytes = v->integer(1 << 16, 1ULL << 36);
     if (auto v = q->get("memory-max-messages")) m.memory_max_messages = v->integer(16, 1ULL << 32);
     if (auto s = q->get("storage"); s && !s->is_map())
@@ -328,8 +328,8 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
     h.cert_file = resolve(dir, cert->str());
     h.key_file = resolve(dir, key->str());
     std::error_code ec;
-    if (!fs::is_regular_file(h.cert_file, ec)) cert->fail("file '" + h.cert_file + "' not found");
-    if (!fs::is_regular_file(h.key_file, ec)) key->fail("file '" + h.key_file + "' not found");
+    if (!fs::is_regular_file(h.cert_file, ec)) cert->fail("file '" + h.cert_file.string() + "' not found");
+    if (!fs::is_regular_file(h.key_file, ec)) key->fail("file '" + h.key_file.string() + "' not found");
   }
   if (auto n = a.get("host-names")) {
     for (const auto& item : n->items()) {
@@ -357,7 +357,7 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
     if (auto v = r->get("burst")) h.rate_burst = static_cast<double>(v->integer(1, 1'000'000));
     h.rate_burst = std::max(h.rate_burst, h.rate_limit);
   }
-  if (auto v = a.get("web-root")) h.web_root = resolve(dir, v->str());
+  if (auto v = a.get("web-root")) h.static_dir = resolve(dir, v->str());
   if (auto t = a.get("tokens")) {
     std::set<std::string> names;
     for (const auto& item : t->items()) {
@@ -382,24 +382,6 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
 
 }  // namespace
 
-StorageMode MqttConfig::storage_for(EventKind k) const {
-  if (auto it = storage.find(k); it != storage.end()) return it->second;
-  return qos_for(k) == 0 ? StorageMode::Outage : StorageMode::Disk;
-}
-
-int MqttConfig::qos_for(EventKind k) const {
-  if (auto it = qos.find(k); it != qos.end()) return it->second;
-  switch (k) {
-    case EventKind::Tpdo:
-    case EventKind::UnclaimedPdo:
-    case EventKind::Heartbeat:
-    case EventKind::Sync:
-    case EventKind::Time:
-      return 0;
-    default:
-      return 1;
-  }
-}
 
 std::string default_gateway_id() {
   char host[256] = {};
@@ -479,7 +461,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
       }
     };
     if (auto q = m->get("qos"))
-      per_kind(*q, [&](EventKind k, const At& v) { c.mqtt.qos[k] = static_cast<int>(v.integer(0, 2)); });
+      per_kind(*q, [&](EventKind k, const At& v) { c.mqtt.qos[k] = static_cast<std::uint8_t>(v.integer(0, 2)); });
     if (auto s = m->get("queue") ? m->get("queue")->get("storage") : std::nullopt) {
       per_kind(*s, [&](EventKind k, const At& v) {
         const auto mode = v.str();
@@ -566,7 +548,7 @@ Config merge(Config c, const CliOptions& cli) {
   }
   if (cli.mqtt_uri) {
     c.mqtt.enabled = true;
-    c.mqtt.uri = *cli.mqtt_uri;
+    c.mqtt.server_uri = *cli.mqtt_uri;
     c.mqtt.uri_origin = "--mqtt " + *cli.mqtt_uri;
   }
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
@@ -599,8 +581,8 @@ Config merge(Config c, const CliOptions& cli) {
                          : (fs::path(home) / ".local/state/canopen-gateway").string();
     c.state_dir_origin = std::string("gateway.state-dir not set, default for ") + (system ? "root" : "a user ($HOME)");
   }
-  if (c.mqtt.queue_dir.empty()) {
-    c.mqtt.queue_dir = (fs::path(c.state_dir) / "mqtt-queue").string();
+  if (c.mqtt.queue.dir.empty()) {
+    c.mqtt.queue.dir = fs::path(c.state_dir) / "mqtt-queue";
     c.queue_dir_origin = "mqtt.queue.dir not set, default <state-dir>/mqtt-queue (" + c.state_dir_origin + ")";
   }
 

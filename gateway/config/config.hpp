@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "cli.hpp"
+#include "http/http_config.hpp"
+#include "mqtt/mqtt_config.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
 #include "role.hpp"
@@ -93,44 +95,26 @@ struct NetworkConfig {
   std::vector<NodeConfig> nodes;
 };
 
-enum class PayloadFormat : std::uint8_t { Json, Protobuf };
+// The MQTT and HTTP settings are the components' own structs
+// (mqtt/mqtt_config.hpp, http/http_config.hpp: their defaults live there);
+// the gateway's keys that the components do not read extend them here.
+using mqtt::PayloadFormat;
+using mqtt::StorageMode;
 
-// Where an event kind's MQTT messages wait (mqtt/outbound_queue.hpp): disk
-// (written and synced), outage (memory while the broker is connected, disk
-// while it is not), memory (never on storage).
-enum class StorageMode : std::uint8_t { Disk, Outage, Memory };
-
-struct MqttConfig {
+struct MqttConfig : mqtt::MqttConfig {
   bool enabled = false;
-  std::string uri;  // tcp://host:1883, ssl://host:8883, ...
-  // Where uri came from, to start a message about it: "--mqtt tcp://x:1",
-  // "gw.yaml:12: mqtt.uri" (merge()).
+  // Where server_uri came from, to start a message about it: "--mqtt
+  // tcp://x:1", "gw.yaml:12: mqtt.uri" (merge()). client_id: default
+  // "canopen-gateway-<gateway id>" (merge()); gateway_id and the status
+  // payloads are filled in by the App.
   std::string uri_origin;
-  std::string client_id;  // default "canopen-gateway-<gateway id>"
-  std::string username;
-  std::string password;
-  std::string ca_file, cert_file, key_file;  // TLS
-  PayloadFormat format = PayloadFormat::Json;
-  std::map<EventKind, int> qos;  // per kind; defaults: tpdo/heartbeat/sync/time 0, others 1
   bool heartbeat = true;         // publish heartbeat events at all
   std::chrono::milliseconds heartbeat_min_interval{0};  // per node; 0 = every heartbeat
-  std::string queue_dir;              // disk buffer ("" = <state dir>/mqtt-queue)
-  std::uint64_t queue_max_bytes = 256ULL << 20;
-  std::uint64_t queue_max_messages = 1'000'000;
-  std::uint64_t memory_max_bytes = 16ULL << 20;  // the memory tier (outage and memory kinds)
-  std::uint64_t memory_max_messages = 100'000;
-  std::map<EventKind, StorageMode> storage;  // per kind; default: outage for QoS 0 kinds, disk for the others
   // Role of an MQTT request that carries no token (anyone who may publish
   // to the request topics on the broker). nullopt (not set): None, a token
   // is required, also without http.tokens; --demo without tokens sets
   // viewer (the README's tour reads over MQTT).
   std::optional<Role> requests_role;
-  // mqtt.reply-topics: topic filters a request's reply topic must match,
-  // instead of the default rule (mqtt/topic_filter.hpp,
-  // reply_topic_refusal). Empty: the default. Each is a valid filter.
-  std::vector<std::string> reply_topics;
-  int qos_for(EventKind k) const;
-  StorageMode storage_for(EventKind k) const;
 };
 
 struct TokenConfig {
@@ -139,23 +123,13 @@ struct TokenConfig {
   std::string sha256;  // hex SHA-256 of the bearer token
 };
 
-struct HttpConfig {
-  std::string address = "127.0.0.1";  // an IP literal once merge()d ("localhost" becomes 127.0.0.1)
-  unsigned short port = 8080;
+struct HttpConfig : http::HttpConfig {
   // Where address and port came from, with the value, to start a message
   // about them: "--http 0.0.0.0:8080", "gw.yaml:30: http.listen
   // 0.0.0.0:8080", "http.listen not set, default 127.0.0.1:8080" (merge()).
+  // address is an IP literal once merge()d ("localhost" becomes 127.0.0.1).
   std::string listen_origin;
-  std::string cert_file, key_file;  // HTTPS/WSS when both are set
-  std::string tls_origin;           // "gw.yaml:31: http.tls"
-  // Names (or IP literals) besides the listen address that browsers may use
-  // in Host (421 for others), and origins besides the gateway's own from
-  // which browsers may change state or open the event stream (403 for
-  // others); see gateway/http/request_checks.hpp.
-  std::vector<std::string> host_names;
-  std::vector<std::string> allowed_origins;
-  std::size_t max_connections = 256;              // HTTP + WebSocket; the longest idle one makes room
-  std::size_t max_connections_per_address = 32;   // per client address; 0 = no limit
+  std::string tls_origin;  // "gw.yaml:31: http.tls"
   std::vector<TokenConfig> tokens;
   // On by default (off in --demo). With tokens, every request but the
   // dashboard's files and the OpenAPI document needs one. Without tokens
@@ -166,7 +140,7 @@ struct HttpConfig {
   bool plain_http = false;
   double rate_limit = 50;  // requests per second per client address (0 = no limit)
   double rate_burst = 100;
-  std::string web_root;  // dashboard files ("" = the built-in default)
+  // static_dir (http.web-root): "" = the built-in default (main).
 
   bool loopback() const { return address == "127.0.0.1" || address == "::1" || address == "localhost"; }
   // What a caller without a token may do (Role::None: nothing).

@@ -46,7 +46,7 @@ void check(const std::string& dir, const std::string& key, const std::string& or
 void check_state_dirs(const Config& c) {
   if (c.state_dir.empty()) return;
   check(c.state_dir, "gateway.state-dir", c.state_dir_origin);
-  if (c.mqtt.enabled) check(c.mqtt.queue_dir, "mqtt.queue.dir", c.queue_dir_origin);
+  if (c.mqtt.enabled) check(c.mqtt.queue.dir.string(), "mqtt.queue.dir", c.queue_dir_origin);
 }
 
 }  // namespace gateway

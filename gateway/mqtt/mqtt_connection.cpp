@@ -59,21 +59,15 @@ Endpoint parse_endpoint(const std::string& uri) {
 }
 
 MqttConnection::MqttConnection(asio::io_context& io, asio::ssl::context* tls_ctx, bool verify_server, Callbacks cb)
-    : io_(io), tls_ctx_(tls_ctx), verify_server_(verify_server), cb_(std::move(cb)), tcp_(io),
-      connect_timer_(io), keepalive_timer_(io) {}
+    : io_(io), tls_ctx_(tls_ctx), verify_server_(verify_server), cb_(std::move(cb)), tcp_(io) {}
 
 MqttConnection::~MqttConnection() = default;
 
 tcp::socket& MqttConnection::sock() { return tls_ ? tls_->next_layer() : tcp_; }
 
-void MqttConnection::open(const Endpoint& ep, std::string connect_packet, std::uint8_t version,
-                          std::chrono::seconds connect_timeout, std::chrono::seconds keepalive,
-                          std::size_t max_packet) {
-  version_ = version;
-  keepalive_ = keepalive;
+void MqttConnection::open(const Endpoint& ep) {
   host_ = ep.host;
-  decoder_.set_max_packet_size(max_packet);
-  out_ = std::move(connect_packet);
+  out_.clear();
   sent_ = 0;
   if (ep.tls) {
     if (!tls_ctx_) {
@@ -82,10 +76,6 @@ void MqttConnection::open(const Endpoint& ep, std::string connect_packet, std::u
     }
     tls_ = std::make_unique<asio::ssl::stream<tcp::socket>>(io_, *tls_ctx_);
   }
-  connect_timer_.expires_after(connect_timeout);
-  connect_timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
-    if (!ec && self->state_ != State::Up && self->state_ != State::Closed) self->fail("connect timeout");
-  });
   auto on_connect = [self = shared_from_this()](const boost::system::error_code& ec, const tcp::endpoint&) {
     if (self->state_ == State::Closed) return;
     if (ec) {
@@ -124,10 +114,7 @@ void MqttConnection::on_connected() {
     // TCP: flush() calls send() directly and waits only when the kernel's
     // buffer is full.
     sock().non_blocking(true, ec);
-    state_ = State::AwaitConnack;
-    last_read_ = last_write_ = Clock::now();
-    flush();
-    start_read();
+    opened();
     return;
   }
   if (verify_server_) {
@@ -147,15 +134,22 @@ void MqttConnection::on_connected() {
       self->fail("TLS handshake with " + self->host_ + ": " + e.message());
       return;
     }
-    self->state_ = State::AwaitConnack;
-    self->last_read_ = self->last_write_ = Clock::now();
-    self->flush();
-    self->start_read();
+    self->opened();
   });
 }
 
+// The owner appends CONNECT in on_open; it is the first thing written.
+void MqttConnection::opened() {
+  state_ = State::Open;
+  if (cb_.on_open) cb_.on_open();
+  if (state_ != State::Open) return;
+  flush();
+  if (state_ != State::Open) return;
+  start_read();
+}
+
 void MqttConnection::flush() {
-  if ((state_ != State::AwaitConnack && state_ != State::Up) || write_busy_) return;
+  if (state_ != State::Open || write_busy_) return;
   if (tls_) {
     if (out_.empty()) return;
     wbuf_.swap(out_);
@@ -190,10 +184,7 @@ void MqttConnection::flush() {
   }
   out_.clear();
   sent_ = 0;
-  if (wrote) {
-    last_write_ = Clock::now();
-    if (cb_.on_drained) cb_.on_drained();
-  }
+  if (wrote && cb_.on_drained) cb_.on_drained();
 }
 
 void MqttConnection::write_done(const boost::system::error_code& ec) {
@@ -205,7 +196,6 @@ void MqttConnection::write_done(const boost::system::error_code& ec) {
   }
   if (tls_) {
     wbuf_.clear();
-    last_write_ = Clock::now();
     if (out_.empty()) {
       if (cb_.on_drained) cb_.on_drained();
       return;
@@ -215,7 +205,7 @@ void MqttConnection::write_done(const boost::system::error_code& ec) {
 }
 
 void MqttConnection::ack_now() {
-  if (state_ != State::Up) return;
+  if (state_ != State::Open) return;
   const int one = 1;
   ::setsockopt(sock().native_handle(), IPPROTO_TCP, TCP_QUICKACK, &one, sizeof one);
   read_again_ = true;  // on_read() tries one more non-blocking read
@@ -255,76 +245,11 @@ void MqttConnection::on_read(const boost::system::error_code& ec, std::size_t n)
   if (state_ != State::Closed) start_read();
 }
 
-// Decodes and dispatches one chunk; false when the connection closed.
+// Hands one chunk up; false when the connection closed meanwhile.
 bool MqttConnection::consume(std::size_t n) {
   ++reads_;
-  last_read_ = Clock::now();
-  ping_outstanding_ = false;  // anything from the broker shows it is alive
-  decoder_.feed(std::string_view(rbuf_.data(), n));
-  codec::Packet p;
-  bool any = false;
-  while (decoder_.next(p)) {
-    handle(p);
-    if (state_ == State::Closed) return false;
-    any = true;
-  }
-  if (decoder_.error() != codec::Error::None) {
-    fail(std::string("malformed data from the broker: ") + codec::to_string(decoder_.error()));
-    return false;
-  }
-  if (any && state_ == State::Up && cb_.on_batch_end) cb_.on_batch_end();
+  if (cb_.on_data) cb_.on_data(std::string_view(rbuf_.data(), n));
   return state_ != State::Closed;
-}
-
-void MqttConnection::handle(const codec::Packet& p) {
-  if (state_ == State::AwaitConnack) {
-    if (p.type != codec::PacketType::Connack) {
-      fail("expected CONNACK");
-      return;
-    }
-    codec::Connack ca;
-    if (auto e = codec::parse_connack(p, version_, ca); e != codec::Error::None) {
-      fail(std::string("bad CONNACK: ") + codec::to_string(e));
-      return;
-    }
-    connect_timer_.cancel();
-    state_ = State::Up;
-    if (ca.code == 0 && ca.server_keepalive) keepalive_ = std::chrono::seconds(*ca.server_keepalive);
-    if (ca.code == 0) arm_keepalive();
-    if (cb_.on_connack) cb_.on_connack(ca);
-    return;
-  }
-  switch (p.type) {
-    case codec::PacketType::Pingresp: return;
-    case codec::PacketType::Connack: fail("second CONNACK"); return;
-    default:
-      if (cb_.on_packet) cb_.on_packet(p);
-  }
-}
-
-// Checked every half keepalive: a PINGREQ when the link has been quiet in
-// either direction, so the broker answers something; no byte from it for
-// 1.5 keepalives means the connection is dead. No timer is touched per
-// packet (a timer change costs a syscall).
-void MqttConnection::arm_keepalive() {
-  if (keepalive_.count() <= 0) return;
-  const auto period = std::max<std::chrono::milliseconds>(keepalive_ / 2, std::chrono::milliseconds(500));
-  keepalive_timer_.expires_after(period);
-  keepalive_timer_.async_wait([self = shared_from_this(), period](const boost::system::error_code& ec) {
-    if (ec || self->state_ != State::Up) return;
-    const auto now = Clock::now();
-    if (now - self->last_read_ > std::chrono::milliseconds(self->keepalive_) * 3 / 2) {
-      self->fail("no answer from the broker within 1.5 keepalive intervals");
-      return;
-    }
-    if (!self->ping_outstanding_ && (now - self->last_read_ >= period || now - self->last_write_ >= period)) {
-      codec::encode_pingreq(self->out_);
-      self->ping_outstanding_ = true;
-      self->flush();
-      if (self->state_ != State::Up) return;
-    }
-    self->arm_keepalive();
-  });
 }
 
 void MqttConnection::fail(std::string why) {
@@ -341,14 +266,12 @@ void MqttConnection::close() {
   if (state_ == State::Closed) return;
   state_ = State::Closed;
   boost::system::error_code ec;
-  connect_timer_.cancel();
-  keepalive_timer_.cancel();
   if (resolver_) resolver_->cancel();
   sock().close(ec);
 }
 
 bool MqttConnection::finish(std::string_view tail, std::chrono::milliseconds timeout) {
-  if (state_ != State::Up) {
+  if (state_ != State::Open) {
     close();
     cb_ = {};
     return false;

@@ -1,8 +1,8 @@
 // One MQTT network connection on the caller's io_context: TCP or TLS
-// connect (with a timeout covering connect, handshake and CONNACK), the
-// CONNECT/CONNACK exchange, a read loop that decodes packets, coalesced
-// writes, and keepalive (PINGREQ, and a dead-connection timeout). It knows
-// nothing of sessions, queues or packet ids: MqttPublisher drives it.
+// connect, a read loop that hands up what arrives, and coalesced writes.
+// It knows no MQTT packets, sessions, queues or timeouts: the Session
+// (session.hpp) does the protocol and MqttPublisher drives both (and limits
+// the connect time by closing the connection).
 //
 // Writing: callers append encoded packets to out() and call flush().
 // Everything appended while a write is in progress goes out in the next
@@ -11,11 +11,10 @@
 // syscall. on_drained is called (possibly from inside flush()) whenever
 // every appended byte has been handed to the kernel.
 //
-// Callbacks: on_connack once (any reason code; the owner closes on a
-// refusal), on_packet for each packet after it (PINGRESP is swallowed),
-// on_batch_end after the packets of one read, on_closed once when the
-// connection fails or the broker closes it (never after close() or
-// finish(); posted, never from inside a caller's call).
+// Callbacks: on_open once the transport is up (TCP connected, TLS
+// handshake done: append CONNECT and flush), on_data for each chunk read,
+// on_closed once when the connection fails or the broker closes it (never
+// after close() or finish(); posted, never from inside a caller's call).
 //
 // Thread safety: none; every call on the io thread. Create with
 // std::make_shared (handlers keep the connection alive until they ran).
@@ -31,9 +30,7 @@
 #include <boost/asio/ip/tcp.hpp>
 #include <boost/asio/ssl/context.hpp>
 #include <boost/asio/ssl/stream.hpp>
-#include <boost/asio/steady_timer.hpp>
-
-#include "mqtt/mqtt_codec.hpp"
+#include <string_view>
 
 namespace gateway::mqtt {
 
@@ -50,9 +47,8 @@ Endpoint parse_endpoint(const std::string& normalized_uri);
 class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
  public:
   struct Callbacks {
-    std::function<void(const codec::Connack&)> on_connack;
-    std::function<void(const codec::Packet&)> on_packet;
-    std::function<void()> on_batch_end;
+    std::function<void()> on_open;
+    std::function<void(std::string_view)> on_data;
     std::function<void()> on_drained;
     std::function<void(const std::string& why)> on_closed;
   };
@@ -64,17 +60,14 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   MqttConnection(const MqttConnection&) = delete;
   MqttConnection& operator=(const MqttConnection&) = delete;
 
-  // Starts connecting; connect_packet (an encoded CONNECT) is the first
-  // thing written. version: the CONNECT's protocol level (for decoding).
-  // keepalive 0: no PINGREQ and no dead-connection check.
-  void open(const Endpoint& ep, std::string connect_packet, std::uint8_t version,
-            std::chrono::seconds connect_timeout, std::chrono::seconds keepalive, std::size_t max_packet);
+  // Starts connecting (resolve, TCP, TLS); on_open when done.
+  void open(const Endpoint& ep);
 
   // Sends the TCP ACK for what was read now instead of the kernel's
   // delayed ACK (TCP_QUICKACK). For a reader that read but writes nothing
   // back: a broker with Nagle on (mosquitto's default) holds its next
   // PUBACKs until that ACK comes, up to the delayed-ACK timeout (40 ms).
-  // Called from on_batch_end, it also makes the read loop try one more
+  // Called from on_data, it also makes the read loop try one more
   // non-blocking read before it waits (what the ACK released is often
   // there already).
   void ack_now();
@@ -93,20 +86,19 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   // the Will).
   bool finish(std::string_view tail, std::chrono::milliseconds timeout);
 
-  bool up() const { return state_ == State::Up; }
+  bool up() const { return state_ == State::Open; }
   std::uint64_t writes() const { return writes_; }  // send()/write calls made
   std::uint64_t reads() const { return reads_; }
 
  private:
-  enum class State : std::uint8_t { Connecting, AwaitConnack, Up, Closed };
+  enum class State : std::uint8_t { Connecting, Open, Closed };
   boost::asio::ip::tcp::socket& sock();
   void on_connected();
   void start_read();
   void on_read(const boost::system::error_code& ec, std::size_t n);
   bool consume(std::size_t n);
-  void handle(const codec::Packet& p);
+  void opened();
   void fail(std::string why);
-  void arm_keepalive();
   void write_done(const boost::system::error_code& ec);
 
   boost::asio::io_context& io_;
@@ -116,20 +108,13 @@ class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
   boost::asio::ip::tcp::socket tcp_;
   std::unique_ptr<boost::asio::ssl::stream<boost::asio::ip::tcp::socket>> tls_;
   std::unique_ptr<boost::asio::ip::tcp::resolver> resolver_;
-  boost::asio::steady_timer connect_timer_;
-  boost::asio::steady_timer keepalive_timer_;
   State state_ = State::Connecting;
-  std::uint8_t version_ = codec::kMqtt5;
   std::string host_;
-  codec::Decoder decoder_;
   std::string rbuf_;
   // TCP: out_[sent_..] is unwritten; TLS: wbuf_ is being written, out_ waits.
   std::string out_, wbuf_;
   std::size_t sent_ = 0;
   bool write_busy_ = false;
-  std::chrono::seconds keepalive_{0};
-  std::chrono::steady_clock::time_point last_read_{}, last_write_{};
-  bool ping_outstanding_ = false;
   bool read_again_ = false;  // set by ack_now(): read once more before waiting
   std::uint64_t writes_ = 0, reads_ = 0;
 };

@@ -45,10 +45,9 @@
 #include <unordered_set>
 
 #include "mqtt/disk_queue.hpp"
+#include "mqtt/mqtt_config.hpp"  // StorageMode
 
 namespace gateway::mqtt {
-
-enum class StorageMode : std::uint8_t { Disk, Outage, Memory };
 
 std::string_view to_string(StorageMode m);
 

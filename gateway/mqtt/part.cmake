@@ -1,13 +1,14 @@
 # MQTT transport: a crash-safe disk queue with a memory tier in front
-# (outbound_queue), a stall detector, a sans-I/O MQTT 3.1.1/5 codec, a
-# TCP/TLS connection on Boost.Asio, and the publisher that also takes
-# requests (see mqtt/publisher.hpp).
+# (outbound_queue), a stall detector, a sans-I/O MQTT 3.1.1/5 codec and
+# session (session.hpp), a TCP/TLS connection on Boost.Asio, and the
+# publisher (the Asio adapter) that also takes requests (mqtt/publisher.hpp).
 find_package(OpenSSL REQUIRED)
 include(${CMAKE_CURRENT_LIST_DIR}/codec.cmake)
 add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/disk_queue.cpp
   ${CMAKE_CURRENT_LIST_DIR}/outbound_queue.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stall_detector.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/session.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mqtt_connection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp)
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)

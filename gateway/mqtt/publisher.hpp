@@ -2,7 +2,13 @@
 // OutboundQueue (a bounded memory tier and a crash-safe DiskQueue) and takes
 // SDO/NMT requests (../shared/api-contract.md).
 //
-// Storage: each event kind has a StorageMode (MqttConfig::storage;
+// Settings: MqttConfig (mqtt_config.hpp). The MQTT protocol (CONNECT and
+// CONNACK, packet ids, the in-flight window, keepalive, the fallback to
+// 3.1.1, the broker's limits) is the sans-I/O Session (session.hpp); the
+// publisher is its Asio adapter: the socket (mqtt_connection.hpp), the
+// timers, the reconnect backoff, the queue and its storage, and requests.
+//
+// Storage: each event kind has a StorageMode (MqttConfig::storage_for;
 // outbound_queue.hpp). `disk` (default for QoS 1 kinds): written to the
 // DiskQueue and fdatasync'ed. `outage` (default for QoS 0 kinds): kept in
 // memory while the broker is connected, so a healthy link costs no storage
@@ -109,64 +115,11 @@
 
 #include "event_message.hpp"
 #include "log.hpp"
+#include "mqtt/mqtt_config.hpp"
 #include "mqtt/outbound_queue.hpp"
 #include "requests.hpp"
 
 namespace gateway::mqtt {
-
-enum class PayloadFormat : std::uint8_t { Json, Protobuf };
-
-constexpr std::size_t kEventKindCount = 10;  // EventKind values
-
-// Default QoS per EventKind: 1 for status, bus, state, emcy and boot (state
-// a subscriber must not miss), 0 for the high-rate heartbeat, tpdo, pdo,
-// sync and time.
-constexpr std::array<std::uint8_t, kEventKindCount> kDefaultQos = {1, 1, 1, 0, 1, 0, 0, 0, 0, 1};
-// Default storage per EventKind: `disk` for the QoS 1 kinds, `outage` for
-// the QoS 0 ones.
-constexpr std::array<StorageMode, kEventKindCount> kDefaultStorage = [] {
-  std::array<StorageMode, kEventKindCount> a{};
-  for (std::size_t k = 0; k < kEventKindCount; ++k) a[k] = kDefaultQos[k] == 0 ? StorageMode::Outage : StorageMode::Disk;
-  return a;
-}();
-
-struct MqttConfig {
-  std::string server_uri;   // tcp:// ssl:// mqtt:// mqtts:// (host[:port])
-  std::string client_id;    // MUST be unique on the broker
-  std::string username;     // empty: none
-  std::string password;
-  // TLS (ssl:// and mqtts://): PEM files; empty ca_file = system trust store.
-  std::string ca_file, cert_file, key_file, key_password;
-  bool verify_server = true;
-  int mqtt_version = 5;  // 5: MQTT 5 with fallback to 3.1.1; 4: 3.1.1 only
-  std::chrono::seconds keepalive{30};
-  std::chrono::seconds connect_timeout{10};
-  std::chrono::milliseconds reconnect_min{250};
-  std::chrono::milliseconds reconnect_max{10'000};
-  std::string gateway_id;   // topics canopen/<gateway_id>/...
-  // The status payloads (GatewayStatus, proto3 JSON or binary as the caller
-  // wants); the defaults are minimal stand-ins.
-  std::string online_payload = R"({"state":"online"})";
-  std::string offline_payload = R"({"state":"offline"})";  // the Will
-  std::array<std::uint8_t, kEventKindCount> qos = kDefaultQos;  // by EventKind
-  PayloadFormat format = PayloadFormat::Json;
-  std::array<StorageMode, kEventKindCount> storage = kDefaultStorage;  // by EventKind
-  DiskQueueOptions queue;   // queue.dir MUST be set; one directory per publisher
-  // The memory tier (`outage` messages while connected, `memory` ones).
-  std::uint64_t memory_max_bytes = 16ull << 20;
-  std::uint64_t memory_max_messages = 100'000;
-  // fdatasync of the queue's unsynced `disk` data, on the io thread (it
-  // blocks for the sync: on a slow disk choose a longer interval; 0 =
-  // never, page cache only).
-  std::chrono::milliseconds sync_interval{100};
-  // QoS 1 messages in flight. Under MQTT 5 the broker's Receive Maximum
-  // less 4 caps it (mosquitto: 20 by default, so 16).
-  std::size_t inflight_window = 256;
-  bool accept_requests = true;
-  // Topic filters a reply topic must match instead of the default rule
-  // (mqtt.reply-topics); each MUST be valid (topic_filter_problem).
-  std::vector<std::string> reply_topics;
-};
 
 // Largest MQTT 5 correlation data, or 3.1.1 correlationId as JSON text, a
 // request may carry (the reply echoes it).

@@ -47,7 +47,7 @@ Config demo_config(const Broker& broker, const TempDir& state) {
   cli.mqtt_uri = broker.uri();
   Config config = merge(Config{}, cli);
   config.state_dir = state.path().string();
-  config.mqtt.queue_dir = (state.path() / "q").string();
+  config.mqtt.queue.dir = state.path() / "q";
   return config;
 }
 

@@ -112,15 +112,15 @@ http:
   EXPECT_FALSE(n1.nodes[1].boot);
   EXPECT_EQ(c.networks[1].node_id, 1);
   EXPECT_TRUE(c.mqtt.enabled);
-  EXPECT_EQ(c.mqtt.uri, "tcp://broker:1883");
+  EXPECT_EQ(c.mqtt.server_uri, "tcp://broker:1883");
   EXPECT_EQ(c.mqtt.client_id, "gw");
   EXPECT_EQ(c.mqtt.format, PayloadFormat::Protobuf);
   EXPECT_EQ(c.mqtt.qos_for(EventKind::Tpdo), 0);
   EXPECT_EQ(c.mqtt.qos_for(EventKind::Heartbeat), 1);  // default: 1 applies to every kind not named
   EXPECT_FALSE(c.mqtt.heartbeat);
   EXPECT_EQ(c.mqtt.heartbeat_min_interval, 5000ms);
-  EXPECT_EQ(c.mqtt.queue_dir, "/etc/gw/q");  // relative to the file
-  EXPECT_EQ(c.mqtt.queue_max_bytes, 1048576U);
+  EXPECT_EQ(c.mqtt.queue.dir, "/etc/gw/q");  // relative to the file
+  EXPECT_EQ(c.mqtt.queue.max_bytes, 1048576U);
   EXPECT_EQ(c.http.address, "0.0.0.0");
   EXPECT_EQ(c.http.port, 8443);
   ASSERT_EQ(c.http.tokens.size(), 1U);
@@ -295,7 +295,7 @@ TEST(Config, FlagsWinOverTheFile) {
   const Config c = merge(file, cli);
   EXPECT_EQ(c.gateway_id, "from-flag");
   EXPECT_EQ(c.log_level, LogLevel::Trace);
-  EXPECT_EQ(c.mqtt.uri, "tcp://flag:1883");
+  EXPECT_EQ(c.mqtt.server_uri, "tcp://flag:1883");
   EXPECT_EQ(c.mqtt.format, PayloadFormat::Protobuf);
   EXPECT_EQ(c.http.port, 9999);
   ASSERT_EQ(c.networks.size(), 2U);  // --can replaces the file's list, in flag order
@@ -639,7 +639,7 @@ TEST(Config, StateDirectoryFromSystemd) {
   const Config c = merge(Config{}, cli);
   ::unsetenv("STATE_DIRECTORY");
   EXPECT_EQ(c.state_dir, "/var/lib/canopen-gateway-x");
-  EXPECT_EQ(c.mqtt.queue_dir, "/var/lib/canopen-gateway-x/mqtt-queue");
+  EXPECT_EQ(c.mqtt.queue.dir, "/var/lib/canopen-gateway-x/mqtt-queue");
   EXPECT_THAT(c.state_dir_origin, HasSubstr("$STATE_DIRECTORY"));
   EXPECT_THAT(c.queue_dir_origin, HasSubstr("mqtt.queue.dir not set"));
   Config explicit_dir = parse_config("gateway: {state-dir: /srv/gw}\nmqtt:\n  uri: tcp://b:1\n  queue: {dir: q}\n",
