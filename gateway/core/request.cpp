@@ -1,6 +1,11 @@
 #include "core/request.hpp"
 
+#include <boost/json/object.hpp>
+#include <boost/json/serialize.hpp>
+
 #include "canopen/sdo/abort.hpp"
+#include "core/format.hpp"
+#include "http_status.hpp"
 
 namespace gateway::core {
 
@@ -15,7 +20,20 @@ std::string abort_detail(std::uint32_t code, std::string_view context) {
   return d;
 }
 
+std::string utf8(std::string_view s) { return canopen::is_utf8(s) ? std::string(s) : canopen::latin1_to_utf8(s); }
+
 }  // namespace
+
+std::string problem_json(const Problem& p, std::string_view correlation_id) {
+  boost::json::object o;
+  o["type"] = p.type.empty() ? std::string("about:blank") : utf8(p.type);
+  o["title"] = p.title.empty() ? std::string(reason_phrase(p.status)) : utf8(p.title);
+  o["status"] = p.status;
+  o["detail"] = utf8(p.detail);
+  if (p.abort_code) o["abortCode"] = abort_code_text(*p.abort_code);
+  if (!correlation_id.empty()) o["correlationId"] = utf8(correlation_id);
+  return boost::json::serialize(o);
+}
 
 Problem sdo_problem(std::error_code ec, bool remote, std::string_view context) {
   const std::uint32_t code = canopen::to_abort_code(ec);

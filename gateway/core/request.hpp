@@ -169,6 +169,14 @@ using Result = std::variant<SdoValue, NmtSent, RpdoSent, SyncSent, PdoConfigRepo
 // the CiA 301 text as detail (": " and `context` appended when given).
 Problem sdo_problem(std::error_code ec, bool remote, std::string_view context = {});
 
+// The problem+json document of `p` (RFC 9457): type ("about:blank" unless
+// given), title (the status' reason phrase unless given), status, detail,
+// abortCode ("0x06020000") when set, correlationId when not empty; text
+// that is not UTF-8 is read as Latin-1. The one JSON problem builder: REST,
+// MQTT and the HTTP server's own errors (http::Response::problem) use it;
+// the protobuf Problem (request_codec.hpp) has the same fields.
+std::string problem_json(const Problem& p, std::string_view correlation_id = {});
+
 // The role a command needs: SDO read viewer; SDO write, RPDO write, SYNC,
 // PDO configuration read and NMT start/stop/pre-operational operator; NMT
 // reset node / reset communication admin.

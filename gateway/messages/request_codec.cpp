@@ -377,15 +377,24 @@ Reply nmt_response(std::uint32_t network, std::uint8_t node, canopen::NmtCommand
 }
 
 Reply encode_problem(const core::Problem& p, const ReplyOptions& opts) {
+  const std::string_view correlation = p.command_read ? std::string_view(opts.correlation_id) : std::string_view();
+  Reply r;
+  r.status = p.status;
+  r.retry_after = p.retry_after;
+  if (!opts.protobuf) {
+    r.body = core::problem_json(p, correlation);
+    r.content_type = "application/problem+json";
+    return r;
+  }
   pb::Problem m;
   m.set_type(p.type.empty() ? std::string("about:blank") : detail::to_utf8(p.type));
   m.set_title(p.title.empty() ? std::string(reason_phrase(p.status)) : detail::to_utf8(p.title));
   m.set_status(static_cast<std::uint32_t>(p.status));
   m.set_detail(detail::to_utf8(p.detail));
   if (p.abort_code) m.set_abort_code(detail::abort_code_text(*p.abort_code));
-  if (p.command_read && !opts.correlation_id.empty()) m.set_correlation_id(detail::to_utf8(opts.correlation_id));
-  auto r = reply(p.status, m, opts, "application/problem+json");
-  r.retry_after = p.retry_after;
+  if (!correlation.empty()) m.set_correlation_id(detail::to_utf8(correlation));
+  m.SerializeToString(&r.body);
+  r.content_type = "application/x-protobuf";
   return r;
 }
 
