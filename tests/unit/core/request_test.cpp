@@ -2,6 +2,8 @@
 // RequestKind table) and the API names of NMT commands.
 #include "core/request.hpp"
 
+#include "auth.hpp"
+
 #include <gtest/gtest.h>
 
 namespace gateway::core {
@@ -21,6 +23,19 @@ TEST(CommandRoles, ReadsViewerWritesOperatorResetsAdmin) {
   EXPECT_EQ(required_role(Operation::rpdo_write), Role::Operator);
   EXPECT_EQ(required_role(Operation::sync), Role::Operator);
   EXPECT_EQ(required_role(Operation::pdo_config_read), Role::Operator);
+}
+
+// REST checks the route's role before the core checks the command's: the
+// two tables must agree, or a REST caller would be refused by one of them.
+TEST(CommandRoles, AgreeWithTheRestRoutes) {
+  const std::string node = "/api/v1/networks/{net}/nodes/{node}";
+  EXPECT_EQ(auth::required_role("GET", node + "/sdo/{index}/{sub}"), required_role(Operation::sdo_read));
+  EXPECT_EQ(auth::required_role("PUT", node + "/sdo/{index}/{sub}"), required_role(Operation::sdo_write));
+  EXPECT_EQ(auth::required_role("PUT", node + "/rpdo/{n}"), required_role(Operation::rpdo_write));
+  EXPECT_EQ(auth::required_role("POST", node + "/pdo/read"), required_role(Operation::pdo_config_read));
+  EXPECT_EQ(auth::required_role("POST", "/api/v1/networks/{net}/sync"), required_role(Operation::sync));
+  // The NMT route lets operators in; resets are then refused by the core.
+  EXPECT_EQ(auth::required_role("POST", node + "/nmt"), required_role(Operation::nmt, NmtCommand::Start));
 }
 
 TEST(CommandRoles, TheCommandDecidesForNmt) {
