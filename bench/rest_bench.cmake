@@ -1,4 +1,4 @@
-# REST SDO latency through the whole gateway vs. App::handle_request alone;
+# REST SDO latency through the whole gateway vs. the request core alone (App::requests);
 # its own main() (bench/README.md, "REST API").
 if(TARGET gateway_rest)
   add_executable(rest_bench ${CMAKE_CURRENT_LIST_DIR}/rest_bench.cpp)

@@ -8,7 +8,7 @@
 // expedited SDO reads over ONE keep-alive connection, one at a time:
 //   GET /api/v1/networks/1/nodes/5/sdo/1017/0   (u16, producer heartbeat time)
 //   GET /api/v1/networks/1/nodes/5/sdo/6041/0   (u16, Statusword)
-// Then the same uploads go to App::handle_request directly on the io thread
+// Then the same uploads go to the request core (App::requests) directly on the io thread
 // (the bus round trip with the request decoding and the reply encoding,
 // without HTTP). Added latency = REST - direct, per percentile. A bare Asio
 // server answering the same bytes gives the transport floor (loopback TCP
@@ -36,6 +36,7 @@
 #include <vector>
 
 #include "log.hpp"
+#include "request_codec.hpp"
 #include "rest_api.hpp"
 
 namespace {
@@ -207,22 +208,22 @@ int main(int argc, char** argv) {
     }
     const double rest_seconds = std::chrono::duration<double>(Clock::now() - rest_start).count();
 
-    // The same upload through App::handle_request on the io thread, one at
+    // The same upload through the request core (App::requests) on the io thread, one at
     // a time; timed there, from the call to the reply.
     std::vector<double> direct;
     direct.reserve(n);
     std::promise<int> done;
-    ApiRequest req;
-    req.kind = RequestKind::SdoRead;
+    core::Request req;
     req.network = 1;
-    req.node = 5;
-    req.authenticated = true;
-    req.role = Role::Admin;
-    req.body = R"({"index":)" + std::to_string(obj.index) + R"(,"subIndex":0})";
+    req.caller.authenticated = true;
+    req.caller.role = Role::Admin;
+    req.command = core::SdoRead{5, obj.index, 0, {}};
     std::function<void(std::size_t)> next = [&](std::size_t i) {
       if (i == n + 200) return done.set_value(200);
       const auto t0 = Clock::now();
-      app.handle_request(req, [&, i, t0](ApiReply reply) {
+      app.requests().execute(req, [&, i, t0](core::Result result) {
+        // Encoded as REST and MQTT encode it.
+        const Reply reply = encode_result(result);
         if (i >= 200) direct.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
         if (reply.status != 200) return done.set_value(reply.status);
         // Posted, so each request starts from the loop as an HTTP one does.
@@ -241,7 +242,7 @@ int main(int argc, char** argv) {
     std::printf("\nGET %s  (%s)\n", obj.path, body.c_str());
     std::printf("REST over one keep-alive connection: %.0f requests/s\n", static_cast<double>(n) / rest_seconds);
     print("REST latency", r);
-    print("direct App::handle_request", d);
+    print("direct the request core (App::requests)", d);
     // Differences of the tails (p99.9, max) are noise: those are single
     // outliers (scheduling) in either run, not the gateway's cost.
     std::printf("%-34s mean %7.1f  p50 %7.1f  p90 %7.1f  p99 %7.1f us\n", "added by the gateway (REST-direct)",

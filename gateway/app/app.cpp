@@ -1,7 +1,6 @@
 #include "app.hpp"
 
 #include <algorithm>
-#include <cstdio>
 #include <filesystem>
 #include <set>
 
@@ -11,11 +10,12 @@
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/service_driver.hpp"
+#include "core/format.hpp"
 #include "demo_devices.hpp"
 #include "event_encoder.hpp"
 #include "json_text.hpp"
+#include "mqtt/mqtt_requests.hpp"
 #include "mqtt/publisher.hpp"
-#include "request_codec.hpp"
 #include "seq_store.hpp"
 #include "sim/asio_memory_bus.hpp"
 #include "sim/simulator.hpp"
@@ -28,18 +28,6 @@ namespace gateway {
 
 namespace {
 
-// Who asked, for the audit log.
-std::string requester(std::string_view who) { return who.empty() ? std::string("anonymous") : std::string(who); }
-
-// Requests that may wait per node behind the running one: the networks are
-// built with the SDO client's default configuration.
-constexpr std::size_t kSdoQueueLimit = canopen::sdo::ClientConfig{}.queue_limit;
-
-// The queue key of QueueShares for a node's SDO queue.
-std::uint64_t sdo_queue_key(std::uint32_t network, std::uint8_t node) {
-  return std::uint64_t{network} << 8 | node;
-}
-
 using canopen::can::Frame;
 
 // Frames of broadcast services the gateway produces itself that its own
@@ -47,31 +35,15 @@ using canopen::can::Frame;
 bool is_nmt(const Frame& f) { return !f.extended() && !f.remote() && f.id == 0x000; }
 bool is_sync_or_time(const Frame& f) { return !f.extended() && !f.remote() && (f.id == 0x080 || f.id == 0x100); }
 
-std::string hex4(unsigned v) {
-  char b[8];
-  std::snprintf(b, sizeof b, "%04Xh", v);
-  return b;
-}
-
 std::string pdo_text(const canopen::PdoEvent& ev) {
-  char buf[48];
-  std::string s;
-  if (ev.node == 0) {
-    std::snprintf(buf, sizeof buf, "unclaimed PDO %03Xh", static_cast<unsigned>(ev.cob_id));
-    s = buf;
-  } else {
-    s = "node " + std::to_string(ev.node) + " TPDO" + std::to_string(ev.number);
-  }
-  for (const auto& v : ev.values) {
-    std::snprintf(buf, sizeof buf, " %04Xh/%02X ", static_cast<unsigned>(v.index), static_cast<unsigned>(v.sub));
-    s += buf + v.name + "=" + canopen::format_value(v.value);
-  }
+  std::string s = ev.node == 0 ? "unclaimed PDO " + core::hex_number(ev.cob_id, 3) + "h"
+                               : "node " + std::to_string(ev.node) + " TPDO" + std::to_string(ev.number);
+  for (const auto& v : ev.values)
+    s += " " + core::index_text(v.index) + "/" + core::hex_number(v.sub, 2) + " " + v.name + "=" +
+         canopen::format_value(v.value);
   if (ev.values.empty() || ev.error) {
     s += " raw ";
-    for (auto b : ev.raw) {
-      std::snprintf(buf, sizeof buf, "%02X", static_cast<unsigned>(b));
-      s += buf;
-    }
+    core::append_hex(s, ev.raw, core::HexCase::upper);
   }
   if (ev.error) s += " (" + *ev.error + ")";
   return s;
@@ -100,7 +72,82 @@ struct App::Net {
   std::optional<SeqStore> seq;         // the event sequence across restarts (from start())
 };
 
+// The request core's view of the networks: each call on the network's
+// services, the driver following the new deadlines.
+struct App::CoreNetworks final : core::Networks {
+  explicit CoreNetworks(App& a) : app(a) {}
+  App& app;
+  Net& n(std::uint32_t net) const { return *app.nets_[net - 1]; }
+
+  std::uint32_t count() const override { return static_cast<std::uint32_t>(app.nets_.size()); }
+  std::uint8_t own_node_id(std::uint32_t net) const override { return n(net).cfg.node_id; }
+  const canopen::od::ObjectDictionary& own_dictionary(std::uint32_t net) const override { return *n(net).own_od; }
+  std::error_code write_own(std::uint32_t net, std::uint16_t index, std::uint8_t sub,
+                            std::span<const std::uint8_t> data) override {
+    Net& x = n(net);
+    const auto ec = x.own_od->write(index, sub, data);
+    if (!ec) x.driver->poke();
+    return ec;
+  }
+  const canopen::eds::DeviceDescription* description(std::uint32_t net, std::uint8_t node) const override {
+    return app.description(net, node);
+  }
+  std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const override { return app.bus_state(net); }
+  canopen::Result<canopen::sdo::RequestId> sdo_upload(std::uint32_t net, canopen::sdo::Request r) override {
+    Net& x = n(net);
+    auto id = x.network->sdo().upload(std::move(r), canopen::SteadyClock::now());
+    if (id) x.driver->poke();
+    return id;
+  }
+  canopen::Result<canopen::sdo::RequestId> sdo_download(std::uint32_t net, canopen::sdo::Request r,
+                                                        canopen::Bytes data) override {
+    Net& x = n(net);
+    auto id = x.network->sdo().download(std::move(r), std::move(data), canopen::SteadyClock::now());
+    if (id) x.driver->poke();
+    return id;
+  }
+  void send_nmt(std::uint32_t net, canopen::NmtCommand command, std::uint8_t node) override {
+    Net& x = n(net);
+    x.network->send_nmt(command, node);
+    x.driver->poke();
+  }
+  const canopen::pdo::PdoConfig* rpdo_config(std::uint32_t net, std::uint8_t node,
+                                             std::uint16_t number) const override {
+    return app.rpdo_config(net, node, number);
+  }
+  std::error_code write_rpdo(std::uint32_t net, std::uint8_t node, std::uint16_t number,
+                             std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
+                             canopen::Bytes& sent) override {
+    Net& x = n(net);
+    auto& tx = x.network->rpdo();
+    const auto now = canopen::SteadyClock::now();
+    if (auto ec = raw != nullptr ? tx.set_raw(node, number, *raw, now) : tx.set_values(node, number, values, now))
+      return ec;
+    x.driver->poke();
+    if (const auto* p = tx.payload(node, number)) sent = *p;
+    return {};
+  }
+  void send_sync(std::uint32_t net, std::optional<std::uint8_t> counter) override {
+    Net& x = n(net);
+    const Frame f =
+        counter ? Frame::standard(0x080, {*counter}) : Frame::standard(0x080, std::span<const std::uint8_t>{});
+    x.channel->send(f);
+    if (x.driver) x.driver->deliver_locally(f, x.network.get());
+  }
+  bool has_pdo_table(std::uint32_t net, std::uint8_t node) const override {
+    return n(net).network->pdo_config().has_node(node);
+  }
+  std::error_code read_pdo_config(std::uint32_t net, std::uint8_t node,
+                                  std::function<void(const canopen::pdo::PdoReadReport&)> done) override {
+    Net& x = n(net);
+    auto ec = x.network->read_pdo_config(node, std::move(done), canopen::SteadyClock::now());
+    if (!ec) x.driver->poke();
+    return ec;
+  }
+};
+
 struct App::Mqtt {
+  std::unique_ptr<mqtt::MqttRequests> requests;  // before the publisher: its replies go through it
   std::unique_ptr<mqtt::MqttPublisher> publisher;
   // Retained node state topics to delete at a clean stop: every configured
   // node's and every one published.
@@ -116,8 +163,11 @@ App::App(boost::asio::io_context& io, Config config, Logger& log)
         for (const auto& c : config_.http.tokens) t.push_back({c.name, c.role, c.sha256});
         return auth::TokenStore(std::move(t));
       }()),
-      request_limiter_(config_.http.rate_limit, config_.http.rate_burst),
-      sdo_shares_(auth::caller_share(kSdoQueueLimit)),
+      core_networks_(std::make_unique<CoreNetworks>(*this)),
+      core_(*core_networks_, tokens_,
+            core::RequestCore::Settings{config_.mqtt.requests_role.value_or(Role::None), config_.http.rate_limit,
+                                        config_.http.rate_burst, canopen::sdo::ClientConfig{}.queue_limit},
+            [this](const std::string& line) { audit(line); }),
       encode_ctx_{config_.gateway_id},
       pipeline_(
           [this, mqtt_protobuf = config_.mqtt.enabled && config_.mqtt.format == PayloadFormat::Protobuf](
@@ -373,44 +423,6 @@ std::optional<canopen::can::BusState> App::bus_state(std::uint32_t net_number) c
   return nets_[net_number - 1]->channel->state();
 }
 
-std::error_code App::write_rpdo(std::uint32_t net_number, std::uint8_t node, std::uint16_t number,
-                                std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
-                                canopen::Bytes* sent, std::string_view who) {
-  const std::string line = "RPDO write by " + requester(who) +
-                           ": net " + std::to_string(net_number) + " node " + std::to_string(node) + " RPDO" +
-                           std::to_string(number);
-  Net* n = net(net_number);
-  if (n == nullptr) {
-    const auto ec = make_error_code(canopen::SdoAbort::NoSuchObject);
-    audit(line + ": " + ec.message());
-    return ec;
-  }
-  auto& tx = n->network->rpdo();
-  const auto now = canopen::SteadyClock::now();
-  const auto ec = raw != nullptr ? tx.set_raw(node, number, *raw, now) : tx.set_values(node, number, values, now);
-  if (ec) {
-    audit(line + ": " + ec.message());
-    return ec;
-  }
-  n->driver->poke();
-  const auto* p = tx.payload(node, number);
-  if (sent != nullptr && p != nullptr) *sent = *p;
-  audit(line + " = " + (p != nullptr ? detail::to_hex(*p) : std::string()) + ": sent");
-  return {};
-}
-
-bool App::send_sync(std::uint32_t net_number, std::optional<std::uint8_t> counter, std::string_view who) {
-  Net* n = net(net_number);
-  if (n == nullptr) return false;
-  const Frame f =
-      counter ? Frame::standard(0x080, {*counter}) : Frame::standard(0x080, std::span<const std::uint8_t>{});
-  n->channel->send(f);
-  if (n->driver) n->driver->deliver_locally(f, n->network.get());
-  audit("SYNC by " + requester(who) + ": net " +
-        std::to_string(net_number) + (counter ? " counter " + std::to_string(*counter) : std::string()) + ": sent");
-  return true;
-}
-
 const canopen::pdo::RemotePdoTable* App::pdo_config(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return nullptr;
   return &nets_[net_number - 1]->network->pdo_config();
@@ -420,32 +432,6 @@ const canopen::pdo::PdoConfig* App::rpdo_config(std::uint32_t net_number, std::u
                                                 std::uint16_t number) const {
   if (net_number == 0 || net_number > nets_.size()) return nullptr;
   return nets_[net_number - 1]->network->rpdo().config(node, number);
-}
-
-std::error_code App::read_pdo_config(std::uint32_t net_number, std::uint8_t node,
-                                     std::function<void(const canopen::pdo::PdoReadReport&)> done,
-                                     std::string_view who) {
-  const std::string line = "PDO configuration read by " + requester(who) + ": net " + std::to_string(net_number) +
-                           " node " + std::to_string(node);
-  Net* n = net(net_number);
-  if (n == nullptr) {
-    const auto ec = make_error_code(canopen::SdoAbort::NoSuchObject);
-    audit(line + ": " + ec.message());
-    return ec;
-  }
-  auto ec = n->network->read_pdo_config(
-      node,
-      [this, line, done = std::move(done)](const canopen::pdo::PdoReadReport& r) {
-        audit(line + ": " + r.summary());
-        if (done) done(r);
-      },
-      canopen::SteadyClock::now());
-  if (ec) {
-    audit(line + ": " + ec.message());
-    return ec;
-  }
-  n->driver->poke();
-  return {};
 }
 
 canopen::sim::Simulator* App::simulator(std::uint32_t net_number) {
@@ -481,7 +467,7 @@ std::optional<App::MqttCounters> App::mqtt_counters() const {
   out.queue_depth = c.queue_depth;
   out.queue_bytes = c.queue_bytes;
   out.reconnects = c.reconnects;
-  out.requests_refused = c.replies_refused;
+  out.requests_refused = mqtt_->requests ? mqtt_->requests->counters().replies_refused : 0;
   out.stalls = c.stalls;
   out.storage_failing = c.storage_failing;
   const auto& q = mqtt_->publisher->queue_counters();
@@ -549,9 +535,14 @@ void App::start_mqtt() {
   // knows when it went offline).
   mc.online_payload = status_payload(true);
   mc.offline_payload = status_payload(false);
+  mqtt_->requests = std::make_unique<mqtt::MqttRequests>(
+      config_.gateway_id, config_.mqtt.reply_topics, log_,
+      [this](core::Request req, core::RequestCore::Done done) { core_.execute(std::move(req), std::move(done)); });
+  auto* requests = mqtt_->requests.get();
   mqtt_->publisher = std::make_unique<mqtt::MqttPublisher>(
-      io_, mc, log_, [this](const ApiRequest& req, ReplyFn reply) { handle_request(req, std::move(reply)); });
+      io_, mc, log_, [requests](const mqtt::codec::Publish& msg) { requests->on_publish(msg); });
   auto* pub = mqtt_->publisher.get();
+  requests->set_reply_sender(pub->reply_sender());
   for (const auto& n : nets_) {
     for (const auto& node : n->cfg.nodes) mqtt_->state_topics.insert(node_topic(encode_ctx_, n->number, node.id, "state"));
   }
@@ -697,9 +688,8 @@ void App::log_event(const Net& n, const canopen::Event& ev) {
     if (log_.enabled(LogLevel::Trace))
       log_.trace(prefix + " node " + std::to_string(h->node) + " heartbeat " + std::string(canopen::to_string(h->state)));
   } else if (const auto* e = std::get_if<canopen::EmcyEvent>(&ev.body)) {
-    char code[48];
-    std::snprintf(code, sizeof code, "%04Xh, error register %02Xh", e->error_code, e->error_register);
-    log_.warn(prefix + " node " + std::to_string(e->node) + " EMCY " + code + ": " + e->description);
+    log_.warn(prefix + " node " + std::to_string(e->node) + " EMCY " + core::hex_number(e->error_code, 4) +
+              "h, error register " + core::hex_number(e->error_register, 2) + "h: " + e->description);
   } else if (const auto* p = std::get_if<canopen::PdoEvent>(&ev.body)) {
     const auto level = p->node == 0 ? LogLevel::Debug : p->error ? LogLevel::Warn : LogLevel::Debug;
     if (log_.enabled(level)) log_.log(level, prefix + " " + pdo_text(*p));
@@ -716,255 +706,6 @@ void App::log_event(const Net& n, const canopen::Event& ev) {
 
 // ---- requests ----------------------------------------------------------------
 
-void App::handle_request(const ApiRequest& request, ReplyFn reply) {
-  ReplyOptions opts;
-  opts.protobuf = request.protobuf;
-  ApiRequest identified;
-  if (!request.authenticated) {
-    identified = request;
-    const auto denial = auth::identify(identified, tokens_, config_.mqtt.requests_role.value_or(Role::None));
-    // Per caller, as the HTTP authorizer does per address, and before
-    // anything is logged or done: a flood with bad tokens is limited too.
-    if (!request_limiter_.allow(identified.caller, auth::RateLimiter::Clock::now())) {
-      ++counters_.requests_rate_limited;
-      auto r = problem(429, "too many requests from " + identified.caller + "; slow down (http.rate-limit)", opts);
-      r.retry_after = 1;
-      reply(std::move(r));
-      return;
-    }
-    if (const auto& d = denial) {
-      ++counters_.auth_failures;
-      audit("auth failure: " + requester(identified.who) + ": request to net " + std::to_string(request.network) +
-            " node " + std::to_string(request.node) + ": " + std::to_string(d->status) + " " + d->detail);
-      reply(problem(d->status, d->detail, opts));
-      return;
-    }
-  }
-  const ApiRequest& req = request.authenticated ? request : identified;
-  Net* n = net(req.network);
-  if (n == nullptr) {
-    reply(problem(404, "network " + std::to_string(req.network) + " is not configured (networks are 1.." +
-                           std::to_string(nets_.size()) + ")",
-                  opts));
-    return;
-  }
-  if (req.node > 127 || (req.node == 0 && req.kind != RequestKind::Nmt)) {
-    reply(problem(400, "node-ID " + std::to_string(req.node) + " is out of range 1..127", opts));
-    return;
-  }
-  if (req.kind != RequestKind::Nmt) {  // NMT: once its command is known
-    if (auto r = refused(*n, req, auth::required_role(req.kind, 0),
-                         req.kind == RequestKind::SdoRead ? "SDO read" : "SDO write", opts)) {
-      reply(std::move(*r));
-      return;
-    }
-  }
-  switch (req.kind) {
-    case RequestKind::SdoRead:
-      sdo_read(*n, req, std::move(reply));
-      break;
-    case RequestKind::SdoWrite:
-      sdo_write(*n, req, std::move(reply));
-      break;
-    case RequestKind::Nmt:
-      nmt(*n, req, std::move(reply));
-      break;
-  }
-}
-
-namespace {
-
-
-// The type of index/sub: the request's, else the node's EDS/DCF entry's.
-// DOMAIN (raw hex) when neither knows. Error reply when the EDS lacks it.
-std::optional<ApiReply> resolve_type(const canopen::eds::DeviceDescription* desc, std::uint16_t index,
-                                     std::uint8_t sub, std::optional<canopen::DataType> requested,
-                                     const ReplyOptions& opts, canopen::DataType& out,
-                                     const canopen::od::SubEntry** entry) {
-  *entry = desc != nullptr ? desc->od.find(index, sub) : nullptr;
-  if (requested) {
-    out = *requested;
-    return std::nullopt;
-  }
-  if (desc == nullptr) {
-    out = canopen::DataType::Domain;  // no EDS: raw bytes as hex
-    return std::nullopt;
-  }
-  if (*entry == nullptr) {
-    return problem(404, "the node's EDS/DCF has no object " + canopen::od::object_label(index, sub) +
-                            " (give ?type= to ask anyway)",
-                   opts);
-  }
-  out = (*entry)->type;
-  return std::nullopt;
-}
-
-// The same for the gateway's own dictionary.
-std::optional<ApiReply> resolve_own_type(const canopen::od::ObjectDictionary& od, std::uint16_t index, std::uint8_t sub,
-                                         std::optional<canopen::DataType> requested, const ReplyOptions& opts,
-                                         canopen::DataType& out, const canopen::od::SubEntry** entry) {
-  *entry = od.find(index, sub);
-  if (*entry == nullptr) {
-    // As the device would answer (7.2.4.3.17): the object does not exist.
-    const auto code = od.find(index) == nullptr ? canopen::SdoAbort::NoSuchObject : canopen::SdoAbort::NoSuchSubIndex;
-    return sdo_error_reply(make_error_code(code), true, {}, opts);
-  }
-  out = requested.value_or((*entry)->type);
-  return std::nullopt;
-}
-
-}  // namespace
-
-void App::sdo_read(Net& n, const ApiRequest& req, ReplyFn reply) {
-  auto params = parse_sdo_read(req.body, req.protobuf);
-  ReplyOptions opts;
-  opts.protobuf = req.protobuf;
-  if (!params) {
-    reply(bad_request(params.error(), opts));
-    return;
-  }
-  opts.correlation_id = params->correlation_id;
-  const auto index = *params->index;
-  const auto sub = *params->sub;
-  canopen::DataType type{};
-  const canopen::od::SubEntry* entry = nullptr;
-  if (req.node == n.cfg.node_id) {
-    // The gateway's own node: its socket does not hear its own SDO request,
-    // so the dictionary answers directly, with the same access rules.
-    if (auto err = resolve_own_type(*n.own_od, index, sub, params->type, opts, type, &entry)) {
-      reply(std::move(*err));
-      return;
-    }
-    ++counters_.sdo_requests;
-    auto bytes = n.own_od->read(index, sub);
-    if (!bytes) {
-      reply(sdo_error_reply(bytes.error().code, true, bytes.error().detail, opts));
-      return;
-    }
-    auto v = canopen::decode(type, *bytes);
-    if (!v) {
-      reply(problem(400, canopen::od::object_label(index, sub) + ": the value read is not a " +
-                             std::string(canopen::cia309_name(type)) + ": " + v.error().detail,
-                    opts));
-      return;
-    }
-    reply(sdo_response(*v, opts));
-    return;
-  }
-  if (auto err = resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
-    reply(std::move(*err));
-    return;
-  }
-  canopen::sdo::Request r;
-  r.node = req.node;
-  r.index = index;
-  r.sub = sub;
-  // The reply must decode as `type`, so a fixed-size type is the size to
-  // expect: small objects then skip the block initiate (7.2.4.3.13), which
-  // costs devices without block transfer a refusal. Strings and domains
-  // stay unknown.
-  r.expected_size = canopen::fixed_size(type);
-  if (auto full = take_sdo_place(n, req, opts)) {
-    reply(std::move(*full));
-    return;
-  }
-  ++counters_.sdo_requests;
-  r.on_done = [this, type, opts, reply, net = n.number, node = req.node, caller = req.caller,
-               t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
-    sdo_place_freed(net, node, caller);
-    sdo_finished(t0);
-    if (!res.ok()) {
-      reply(transfer_failed(res, opts));
-      return;
-    }
-    auto v = canopen::decode(type, res.data);
-    if (!v) {
-      reply(problem(502, "the device answered " + std::to_string(res.data.size()) + " bytes, which is not a " +
-                             std::string(canopen::cia309_name(type)) + ": " + v.error().detail,
-                    opts));
-      return;
-    }
-    reply(sdo_response(*v, opts));
-  };
-  submitted(n, n.network->sdo().upload(std::move(r), canopen::SteadyClock::now()), req.node, req.caller, opts, reply);
-}
-
-void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
-  auto params = parse_sdo_write(req.body, req.protobuf);
-  ReplyOptions opts;
-  opts.protobuf = req.protobuf;
-  if (!params) {
-    reply(bad_request(params.error(), opts));
-    return;
-  }
-  opts.correlation_id = params->correlation_id;
-  const auto index = *params->index;
-  const auto sub = *params->sub;
-  canopen::DataType type{};
-  const canopen::od::SubEntry* entry = nullptr;
-  const bool own = req.node == n.cfg.node_id;
-  if (auto err = own ? resolve_own_type(*n.own_od, index, sub, params->type, opts, type, &entry)
-                     : resolve_type(description(n.number, req.node), index, sub, params->type, opts, type, &entry)) {
-    reply(std::move(*err));
-    return;
-  }
-  // The value is checked against type and EDS limits before anything goes
-  // on the bus; the errors name the object and the type.
-  auto value = params->value_as(type);
-  if (!value) {
-    reply(bad_request(value.error(), opts));
-    return;
-  }
-  if (entry != nullptr) {
-    std::string detail;
-    if (auto ec = canopen::check_limits(*value, entry->low, entry->high, &detail)) {
-      reply(problem(400, canopen::od::object_label(index, sub) + ": " + detail, opts));
-      return;
-    }
-  }
-  ++counters_.sdo_requests;
-  const canopen::Value written = *value;
-  const std::string line = "SDO write by " + requester(req.who) + ": net " + std::to_string(n.number) + " node " +
-                           std::to_string(req.node) + " " + hex4(index) + " sub " + std::to_string(sub) + " = " +
-                           canopen::format_value(written);
-  if (own) {
-    // As an SDO download would: access, length and limit checks, hooks and
-    // observers (a write to 1016h reconfigures the heartbeat consumers).
-    if (auto ec = n.own_od->write(index, sub, canopen::encode(written))) {
-      audit(line + ": " + ec.message());
-      reply(sdo_error_reply(ec, true, {}, opts));
-      return;
-    }
-    n.driver->poke();
-    audit(line + ": ok");
-    reply(sdo_response(written, opts));
-    return;
-  }
-  if (auto full = take_sdo_place(n, req, opts)) {
-    audit(line + ": " + std::to_string(full->status) + " (" + req.caller + " has its share of the node's SDO queue)");
-    reply(std::move(*full));
-    return;
-  }
-  canopen::sdo::Request r;
-  r.node = req.node;
-  r.index = index;
-  r.sub = sub;
-  r.on_done = [this, opts, reply, written, line, net = n.number, node = req.node, caller = req.caller,
-               t0 = std::chrono::steady_clock::now()](canopen::sdo::TransferResult&& res) {
-    sdo_place_freed(net, node, caller);
-    sdo_finished(t0);
-    if (!res.ok()) {
-      audit(line + ": " + res.error.message());
-      reply(transfer_failed(res, opts));
-      return;
-    }
-    audit(line + ": ok");
-    reply(sdo_response(written, opts));
-  };
-  submitted(n, n.network->sdo().download(std::move(r), canopen::encode(written), canopen::SteadyClock::now()), req.node,
-            req.caller, opts, reply);
-}
-
 http::Authorizer App::http_authorizer() {
   auth::HttpAuthSettings s;
   s.enabled = config_.http.auth;
@@ -977,84 +718,6 @@ http::Authorizer App::http_authorizer() {
 void App::audit(const std::string& line) {
   log_.info("audit: " + line);
   log_.flush();
-}
-
-void App::sdo_finished(std::chrono::steady_clock::time_point submitted_at) {
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted_at).count();
-  const auto& bounds = Counters::kSdoLatencyBounds;
-  const auto slot = static_cast<std::size_t>(std::lower_bound(bounds.begin(), bounds.end(), s) - bounds.begin());
-  ++counters_.sdo_latency_counts[slot];
-  counters_.sdo_latency_sum += s;
-  ++counters_.sdo_latency_count;
-}
-
-ApiReply App::transfer_failed(const canopen::sdo::TransferResult& res, const ReplyOptions& opts) {
-  const bool remote = res.origin == canopen::sdo::Origin::Remote;
-  if (remote) ++counters_.sdo_aborts;
-  if (res.error == make_error_code(canopen::SdoAbort::Timeout)) ++counters_.sdo_timeouts;
-  return sdo_error_reply(res.error, remote, res.detail, opts);
-}
-
-void App::submitted(Net& n, const canopen::Result<canopen::sdo::RequestId>& id, std::uint8_t node,
-                    const std::string& caller, const ReplyOptions& opts, const ReplyFn& reply) {
-  // Queue full for the node (060A0023h): the client should come back later.
-  if (!id) {
-    sdo_place_freed(n.number, node, caller);  // the handler that would give it back never runs
-    auto r = problem(429, "too many SDO requests queued for node " + std::to_string(node), opts);
-    r.retry_after = 1;
-    reply(std::move(r));
-    return;
-  }
-  n.driver->poke();
-}
-
-std::optional<ApiReply> App::take_sdo_place(const Net& n, const ApiRequest& req, const ReplyOptions& opts) {
-  if (sdo_shares_.take(sdo_queue_key(n.number, req.node), req.caller)) return std::nullopt;
-  ++counters_.sdo_share_refused;
-  const std::string who = req.caller.empty() ? std::string("this caller") : req.caller;
-  auto r = problem(429,
-                   who + " has " + std::to_string(sdo_shares_.share()) + " SDO requests waiting for node " +
-                       std::to_string(req.node) + " already, its share of the node's queue of " +
-                       std::to_string(kSdoQueueLimit) + "; send more once one is answered (other callers still get in)",
-                   opts);
-  r.retry_after = 1;
-  return r;
-}
-
-void App::sdo_place_freed(std::uint32_t net, std::uint8_t node, const std::string& caller) {
-  sdo_shares_.give_back(sdo_queue_key(net, node), caller);
-}
-
-void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
-  auto params = parse_nmt(req.body, req.protobuf);
-  ReplyOptions opts;
-  opts.protobuf = req.protobuf;
-  if (!params) {
-    reply(bad_request(params.error(), opts));
-    return;
-  }
-  opts.correlation_id = params->correlation_id;
-  if (auto r = refused(n, req, auth::required_role(RequestKind::Nmt, static_cast<std::uint8_t>(params->command)),
-                       "NMT " + std::string(nmt_command_name(params->command)), opts)) {
-    reply(std::move(*r));
-    return;
-  }
-  ++counters_.nmt_commands;
-  n.network->send_nmt(params->command, req.node);
-  n.driver->poke();
-  audit("NMT " + std::string(nmt_command_name(params->command)) + " by " + requester(req.who) + ": net " +
-        std::to_string(n.number) + " node " + std::to_string(req.node) + ": sent");
-  reply(nmt_response(n.number, req.node, params->command, opts));
-}
-
-std::optional<ApiReply> App::refused(const Net& n, const ApiRequest& req, Role need, std::string_view what,
-                                     const ReplyOptions& opts) {
-  auto d = auth::check_role(req, need);
-  if (!d) return std::nullopt;
-  ++counters_.auth_failures;
-  audit("auth failure: " + requester(req.who) + ": " + std::string(what) + " net " + std::to_string(n.number) +
-        " node " + std::to_string(req.node) + ": " + std::to_string(d->status) + " " + d->detail);
-  return problem(d->status, d->detail, opts);
 }
 
 }  // namespace gateway

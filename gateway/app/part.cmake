@@ -6,6 +6,6 @@ add_library(gateway_app STATIC ${CMAKE_CURRENT_LIST_DIR}/app.cpp ${CMAKE_CURRENT
                                ${CMAKE_CURRENT_BINARY_DIR}/demo_devices.cpp)
 target_include_directories(gateway_app PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_compile_definitions(gateway_app PRIVATE CANOPEN_GATEWAY_VERSION="${PROJECT_VERSION}")
-target_link_libraries(gateway_app PUBLIC gateway_config gateway_auth gateway_pipeline gateway_messages gateway_mqtt gateway_sim
+target_link_libraries(gateway_app PUBLIC gateway_config gateway_auth gateway_core gateway_pipeline gateway_messages gateway_mqtt gateway_sim
                                          canopen_device canopen_network canopen_socketcan canopen_eds
                                   PRIVATE canopen_options)

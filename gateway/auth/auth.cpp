@@ -82,19 +82,6 @@ Role required_role(std::string_view method, std::string_view route) {
   return m == "GET" ? Role::Viewer : Role::Admin;
 }
 
-Role required_role(RequestKind kind, std::uint8_t nmt_command) {
-  switch (kind) {
-    case RequestKind::SdoRead:
-      return Role::Viewer;
-    case RequestKind::SdoWrite:
-      return Role::Operator;
-    case RequestKind::Nmt:
-      // 0x81 reset node, 0x82 reset communication (CiA 301 7.2.8.3.1).
-      return nmt_command == 0x81 || nmt_command == 0x82 ? Role::Admin : Role::Operator;
-  }
-  return Role::Admin;
-}
-
 bool RateLimiter::allow(std::string_view client, Clock::time_point now) {
   if (rate_ <= 0) return true;
   // Forget buckets that have refilled completely: they behave like new ones.
@@ -213,9 +200,9 @@ http::Authorizer make_http_authorizer(HttpAuthSettings settings, const TokenStor
   };
 }
 
-std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role anonymous) {
+std::optional<Denial> identify(core::Caller& req, const TokenStore& tokens, Role anonymous) {
   if (req.authenticated) return std::nullopt;
-  req.caller = std::string(kTokenlessMqttCaller);
+  req.key = std::string(kTokenlessMqttCaller);
   if (req.token.empty()) {
     req.role = anonymous;
     if (req.who.empty()) req.who = "anonymous";
@@ -228,12 +215,12 @@ std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role a
     return Denial{401, "the token is not valid"};
   }
   req.who = p->name + (req.who.empty() ? std::string() : "@" + req.who);
-  req.caller = token_caller(p->name);
+  req.key = token_caller(p->name);
   req.role = p->role;
   return std::nullopt;
 }
 
-std::optional<Denial> check_role(const ApiRequest& req, Role need) {
+std::optional<Denial> check_role(const core::Caller& req, Role need) {
   if (allows(req.role, need)) return std::nullopt;
   if (req.role == Role::None)
     return Denial{401, "this request needs a token (MQTT 5 user property \"authorization\", or \"token\" in the body)"};

@@ -7,9 +7,9 @@
 // NMT start/stop/pre-operational, PDO configuration read), admin resets
 // (NMT reset node/comm).
 // NMT's role depends on the command in the body, so the HTTP layer only
-// asks for operator on the NMT route and the request handler (App) checks
-// the command with required_role(RequestKind, nmt command) for REST and
-// MQTT alike.
+// asks for operator on the NMT route and the request core checks the
+// command with core::required_role (core/request.hpp) for REST and MQTT
+// alike.
 //
 // Thread safety: TokenStore is immutable after construction (any thread).
 // RateLimiter, QueueShares and the authorizer are for the io_context
@@ -25,8 +25,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include "core/request.hpp"
 #include "http_types.hpp"
-#include "requests.hpp"
 #include "role.hpp"
 
 namespace gateway {
@@ -67,12 +67,6 @@ class TokenStore {
 // and the OpenAPI document. Unknown routes need admin (fail closed).
 Role required_role(std::string_view method, std::string_view route);
 
-// The role an API request needs (REST and MQTT): SDO read viewer, SDO write
-// operator, NMT start/stop/preop operator, reset node/comm admin.
-// `nmt_command` is the CiA 301 command specifier (0x01, 0x02, 0x80, 0x81,
-// 0x82); ignored for SDO.
-Role required_role(RequestKind kind, std::uint8_t nmt_command);
-
 // Token bucket per client (an HTTP client address, an MQTT caller):
 // `rate` requests per second, bursts up to `burst`. rate 0 = unlimited.
 // Buckets idle long enough to be full are forgotten, so memory stays
@@ -98,7 +92,7 @@ class RateLimiter {
 // "203.0.113.5:4711" -> "203.0.113.5", "[::1]:80" -> "::1".
 std::string_view peer_address(std::string_view peer);
 
-// Callers for per-caller limits (ApiRequest::caller): a token's holder
+// Callers for per-caller limits (core::Caller::key): a token's holder
 // wherever it comes from, else a client address; MQTT requests without a
 // (valid) token are one caller together, since nothing tells them apart.
 std::string token_caller(std::string_view token_name);  // "token 'dashboard'"
@@ -156,14 +150,15 @@ struct Denial {
 };
 
 // For transports that cannot check a caller themselves (MQTT requests):
-// sets req.role, req.who and req.caller from req.token (token_caller), or
-// `anonymous` (who "anonymous", caller kTokenlessMqttCaller) without one.
-// A token that matches nothing: 401 (caller kTokenlessMqttCaller). Does
-// nothing for an already authenticated request.
-std::optional<Denial> identify(ApiRequest& req, const TokenStore& tokens, Role anonymous);
+// sets caller.role, caller.who and caller.key from caller.token
+// (token_caller; the token is cleared once checked), or `anonymous` (who
+// "anonymous", key kTokenlessMqttCaller) without one. A token that matches
+// nothing: 401 (key kTokenlessMqttCaller). Does nothing for an already
+// authenticated caller.
+std::optional<Denial> identify(core::Caller& caller, const TokenStore& tokens, Role anonymous);
 
-// Whether req.role may do what needs `need`: 401 when it has no role at
+// Whether caller.role may do what needs `need`: 401 when it has no role at
 // all, 403 when it is too low.
-std::optional<Denial> check_role(const ApiRequest& req, Role need);
+std::optional<Denial> check_role(const core::Caller& caller, Role need);
 
 }  // namespace gateway::auth

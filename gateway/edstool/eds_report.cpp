@@ -1,7 +1,8 @@
 #include "eds_report.hpp"
 
+#include "core/format.hpp"
+
 #include <boost/json/array.hpp>
-#include <cstdio>
 
 #include "canopen/json_value.hpp"
 #include "log.hpp"
@@ -17,11 +18,7 @@ json::value optional_value(const std::optional<canopen::Value>& v) {
   return canopen::value_to_json(*v);
 }
 
-std::string index_hex(std::uint16_t index) {
-  char b[8];
-  std::snprintf(b, sizeof b, "%04X", static_cast<unsigned>(index));
-  return b;
-}
+std::string index_hex(std::uint16_t index) { return gateway::core::hex_number(index, 4); }
 
 }  // namespace
 

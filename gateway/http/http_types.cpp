@@ -1,7 +1,6 @@
 #include "http_types.hpp"
 
-#include <boost/json/serialize.hpp>
-#include <boost/json/value.hpp>
+#include "core/request.hpp"
 
 namespace gateway::http {
 
@@ -34,15 +33,13 @@ std::optional<std::string_view> Request::header(std::string_view name) const {
 }
 
 Response Response::problem(int status, std::string_view detail) {
-  boost::json::object o;
-  o["type"] = "about:blank";
-  o["title"] = reason_phrase(status);
-  o["status"] = status;
-  o["detail"] = detail;
+  core::Problem p;
+  p.status = status;
+  p.detail = std::string(detail);
   Response r;
   r.status = status;
   r.content_type = "application/problem+json";
-  r.body = boost::json::serialize(o);
+  r.body = core::problem_json(p);
   return r;
 }
 

@@ -62,7 +62,8 @@ struct Response {
   std::vector<std::pair<std::string, std::string>> headers;
 
   // RFC 9457 problem document: {"type":"about:blank","title":<reason>,
-  // "status":<status>,"detail":<detail>} as application/problem+json.
+  // "status":<status>,"detail":<detail>} as application/problem+json
+  // (core::problem_json, the builder REST and MQTT replies use too).
   static Response problem(int status, std::string_view detail);
   static Response json(std::string body, int status = 200);
 };

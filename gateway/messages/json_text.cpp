@@ -1,5 +1,7 @@
 #include "json_text.hpp"
 
+#include "core/format.hpp"
+
 #include <algorithm>
 #include <array>
 #include <boost/json/serialize.hpp>
@@ -60,28 +62,11 @@ void append_json_string(std::string& out, std::string_view s) {
 void append_uint(std::string& out, std::uint64_t v) { append_chars(out, v); }
 void append_int(std::string& out, std::int64_t v) { append_chars(out, v); }
 
-void append_hex(std::string& out, std::span<const std::uint8_t> bytes) {
-  const std::size_t at = out.size();
-  out.resize(at + bytes.size() * 2);
-  char* p = out.data() + at;
-  for (std::uint8_t b : bytes) {
-    *p++ = kHex[b >> 4];
-    *p++ = kHex[b & 0x0F];
-  }
-}
+void append_hex(std::string& out, std::span<const std::uint8_t> bytes) { core::append_hex(out, bytes); }
 
-std::string to_hex(std::span<const std::uint8_t> bytes) {
-  std::string s;
-  s.reserve(bytes.size() * 2);
-  append_hex(s, bytes);
-  return s;
-}
+std::string to_hex(std::span<const std::uint8_t> bytes) { return core::hex_bytes(bytes); }
 
-std::string abort_code_text(std::uint32_t code) {
-  std::string s = "0x";
-  for (int shift = 28; shift >= 0; shift -= 4) s += static_cast<char>(std::toupper(kHex[(code >> shift) & 0x0F]));
-  return s;
-}
+std::string abort_code_text(std::uint32_t code) { return core::abort_code_text(code); }
 
 UnixTime to_unix_time(std::chrono::system_clock::time_point tp) {
   using namespace std::chrono;

@@ -8,5 +8,5 @@ if(TARGET canopen_proto)
     ${CMAKE_CURRENT_LIST_DIR}/json_text.cpp
     ${CMAKE_CURRENT_LIST_DIR}/proto_value.cpp)
   target_include_directories(gateway_messages PUBLIC ${CMAKE_CURRENT_LIST_DIR})
-  target_link_libraries(gateway_messages PUBLIC canopen_proto canopen_json gateway_lib PRIVATE canopen_options)
+  target_link_libraries(gateway_messages PUBLIC canopen_proto canopen_json gateway_lib gateway_core_types PRIVATE canopen_options)
 endif()

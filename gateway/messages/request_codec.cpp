@@ -158,8 +158,8 @@ bool parse_proto(M& m, std::string_view body) {
 // Replies are not on a hot path: protobuf's own JSON printer, with the
 // same options as the event JSON.
 template <typename M>
-ApiReply reply(int status, const M& m, const ReplyOptions& opts, std::string_view json_type) {
-  ApiReply r;
+Reply reply(int status, const M& m, const ReplyOptions& opts, std::string_view json_type) {
+  Reply r;
   r.status = status;
   if (opts.protobuf) {
     m.SerializeToString(&r.body);
@@ -197,26 +197,6 @@ std::optional<std::uint8_t> parse_sub_index_text(std::string_view s) {
   }
   if (!v || *v > 0xFF) return std::nullopt;
   return static_cast<std::uint8_t>(*v);
-}
-
-std::string_view nmt_command_name(canopen::NmtCommand c) {
-  using C = canopen::NmtCommand;
-  switch (c) {
-    case C::Start: return "start";
-    case C::Stop: return "stop";
-    case C::EnterPreOperational: return "preop";
-    case C::ResetNode: return "reset-node";
-    case C::ResetCommunication: return "reset-comm";
-  }
-  return "unknown";
-}
-
-std::optional<canopen::NmtCommand> nmt_command_from_name(std::string_view s) {
-  using C = canopen::NmtCommand;
-  for (C c : {C::Start, C::Stop, C::EnterPreOperational, C::ResetNode, C::ResetCommunication}) {
-    if (nmt_command_name(c) == s) return c;
-  }
-  return std::nullopt;
 }
 
 canopen::Result<canopen::Value> SdoWriteParams::value_as(canopen::DataType t) const {
@@ -272,38 +252,34 @@ std::optional<canopen::Error> common_from_json(Fields& f, P& p) {
 
 }  // namespace
 
-canopen::Result<SdoReadParams> parse_sdo_read(std::string_view body, bool protobuf, bool require_address) {
+canopen::Result<json::object> parse_json_body(std::string_view body) { return parse_object(body); }
+
+canopen::Result<SdoReadParams> parse_sdo_read(const json::object& body, bool require_address) {
   SdoReadParams p;
-  if (protobuf) {
-    pb::SdoReadRequest m;
-    if (!parse_proto(m, body)) return fail("body is not a valid SdoReadRequest protobuf message");
-    if (auto e = common_from_proto(m, p)) return *e;
-  } else {
-    auto obj = parse_object(body);
-    if (!obj) return obj.error();
-    Fields f{*obj, {}};
-    if (auto e = common_from_json(f, p)) return *e;
-    if (auto u = f.unknown()) return unknown_field(*u);
-  }
+  Fields f{body, {}};
+  if (auto e = common_from_json(f, p)) return *e;
+  if (auto u = f.unknown()) return unknown_field(*u);
   if (!complete_address(p, require_address)) return fail("index is required");
   return p;
 }
 
-canopen::Result<SdoWriteParams> parse_sdo_write(std::string_view body, bool protobuf, bool require_address) {
-  SdoWriteParams p;
-  if (protobuf) {
-    pb::SdoWriteRequest m;
-    if (!parse_proto(m, body)) return fail("body is not a valid SdoWriteRequest protobuf message");
-    if (auto e = common_from_proto(m, p)) return *e;
-    if (m.has_value()) p.value = detail::proto_value_to_json(m.value());
-  } else {
+canopen::Result<SdoReadParams> parse_sdo_read(std::string_view body, bool protobuf, bool require_address) {
+  if (!protobuf) {
     auto obj = parse_object(body);
     if (!obj) return obj.error();
-    Fields f{*obj, {}};
-    if (auto e = common_from_json(f, p)) return *e;
-    if (const json::value* value = f.get("value")) p.value = *value;
-    if (auto u = f.unknown()) return unknown_field(*u);
+    return parse_sdo_read(*obj, require_address);
   }
+  SdoReadParams p;
+  pb::SdoReadRequest m;
+  if (!parse_proto(m, body)) return fail("body is not a valid SdoReadRequest protobuf message");
+  if (auto e = common_from_proto(m, p)) return *e;
+  if (!complete_address(p, require_address)) return fail("index is required");
+  return p;
+}
+
+namespace {
+// What every SDO write request must have, however it was sent.
+canopen::Result<SdoWriteParams> complete_write(SdoWriteParams p, bool require_address) {
   if (p.value.is_null()) return fail("value is required");
   if (!complete_address(p, require_address)) return fail("index is required");
   // A type given with the request: check the value now, so the 400 comes
@@ -314,31 +290,33 @@ canopen::Result<SdoWriteParams> parse_sdo_write(std::string_view body, bool prot
   }
   return p;
 }
+}  // namespace
 
-canopen::Result<NmtParams> parse_nmt(std::string_view body, bool protobuf) {
-  std::string command;
-  NmtParams p;
-  if (protobuf) {
-    pb::NmtRequest m;
-    if (!parse_proto(m, body)) return fail("body is not a valid NmtRequest protobuf message");
-    command = m.command();
-    p.reply_to = m.reply_to();
-    p.correlation_id = m.correlation_id();
-  } else {
+canopen::Result<SdoWriteParams> parse_sdo_write(const json::object& body, bool require_address) {
+  SdoWriteParams p;
+  Fields f{body, {}};
+  if (auto e = common_from_json(f, p)) return *e;
+  if (const json::value* value = f.get("value")) p.value = *value;
+  if (auto u = f.unknown()) return unknown_field(*u);
+  return complete_write(std::move(p), require_address);
+}
+
+canopen::Result<SdoWriteParams> parse_sdo_write(std::string_view body, bool protobuf, bool require_address) {
+  if (!protobuf) {
     auto obj = parse_object(body);
     if (!obj) return obj.error();
-    Fields f{*obj, {}};
-    auto c = string_field(f.get("command"), "command");
-    if (!c) return c.error();
-    auto reply_to = string_field(f.get("replyTo", "reply_to"), "replyTo");
-    if (!reply_to) return reply_to.error();
-    auto corr = string_field(f.get("correlationId", "correlation_id"), "correlationId");
-    if (!corr) return corr.error();
-    if (auto u = f.unknown()) return unknown_field(*u);
-    command = std::move(*c);
-    p.reply_to = std::move(*reply_to);
-    p.correlation_id = std::move(*corr);
+    return parse_sdo_write(*obj, require_address);
   }
+  SdoWriteParams p;
+  pb::SdoWriteRequest m;
+  if (!parse_proto(m, body)) return fail("body is not a valid SdoWriteRequest protobuf message");
+  if (auto e = common_from_proto(m, p)) return *e;
+  if (m.has_value()) p.value = detail::proto_value_to_json(m.value());
+  return complete_write(std::move(p), require_address);
+}
+
+namespace {
+canopen::Result<NmtParams> complete_nmt(NmtParams p, const std::string& command) {
   if (command.empty()) return fail("command is required (start, stop, preop, reset-node, reset-comm)");
   auto cmd = nmt_command_from_name(command);
   if (!cmd) {
@@ -348,8 +326,38 @@ canopen::Result<NmtParams> parse_nmt(std::string_view body, bool protobuf) {
   p.command = *cmd;
   return p;
 }
+}  // namespace
 
-ApiReply sdo_response(const canopen::Value& v, const ReplyOptions& opts) {
+canopen::Result<NmtParams> parse_nmt(const json::object& body) {
+  NmtParams p;
+  Fields f{body, {}};
+  auto c = string_field(f.get("command"), "command");
+  if (!c) return c.error();
+  auto reply_to = string_field(f.get("replyTo", "reply_to"), "replyTo");
+  if (!reply_to) return reply_to.error();
+  auto corr = string_field(f.get("correlationId", "correlation_id"), "correlationId");
+  if (!corr) return corr.error();
+  if (auto u = f.unknown()) return unknown_field(*u);
+  p.reply_to = std::move(*reply_to);
+  p.correlation_id = std::move(*corr);
+  return complete_nmt(std::move(p), *c);
+}
+
+canopen::Result<NmtParams> parse_nmt(std::string_view body, bool protobuf) {
+  if (!protobuf) {
+    auto obj = parse_object(body);
+    if (!obj) return obj.error();
+    return parse_nmt(*obj);
+  }
+  NmtParams p;
+  pb::NmtRequest m;
+  if (!parse_proto(m, body)) return fail("body is not a valid NmtRequest protobuf message");
+  p.reply_to = m.reply_to();
+  p.correlation_id = m.correlation_id();
+  return complete_nmt(std::move(p), m.command());
+}
+
+Reply sdo_response(const canopen::Value& v, const ReplyOptions& opts) {
   pb::SdoResponse m;
   detail::set_proto_value(*m.mutable_value(), v);
   m.set_type(std::string(canopen::cia309_name(v.type)));
@@ -358,8 +366,8 @@ ApiReply sdo_response(const canopen::Value& v, const ReplyOptions& opts) {
   return reply(200, m, opts, "application/json");
 }
 
-ApiReply nmt_response(std::uint32_t network, std::uint8_t node, canopen::NmtCommand command,
-                      const ReplyOptions& opts) {
+Reply nmt_response(std::uint32_t network, std::uint8_t node, canopen::NmtCommand command,
+                   const ReplyOptions& opts) {
   pb::NmtResponse m;
   m.set_network(network);
   m.set_node(node);
@@ -368,49 +376,57 @@ ApiReply nmt_response(std::uint32_t network, std::uint8_t node, canopen::NmtComm
   return reply(200, m, opts, "application/json");
 }
 
-namespace {
-ApiReply problem_with(int status, std::string_view detail_text, const ReplyOptions& opts, std::string_view title,
-                      std::string_view type, std::optional<std::uint32_t> abort_code) {
+Reply encode_problem(const core::Problem& p, const ReplyOptions& opts) {
+  const std::string_view correlation = p.command_read ? std::string_view(opts.correlation_id) : std::string_view();
+  Reply r;
+  r.status = p.status;
+  r.retry_after = p.retry_after;
+  if (!opts.protobuf) {
+    r.body = core::problem_json(p, correlation);
+    r.content_type = "application/problem+json";
+    return r;
+  }
   pb::Problem m;
-  m.set_type(type.empty() ? std::string("about:blank") : detail::to_utf8(type));
-  m.set_title(title.empty() ? std::string(reason_phrase(status)) : detail::to_utf8(title));
-  m.set_status(static_cast<std::uint32_t>(status));
-  m.set_detail(detail::to_utf8(detail_text));
-  if (abort_code) m.set_abort_code(detail::abort_code_text(*abort_code));
-  if (!opts.correlation_id.empty()) m.set_correlation_id(detail::to_utf8(opts.correlation_id));
-  return reply(status, m, opts, "application/problem+json");
+  m.set_type(p.type.empty() ? std::string("about:blank") : detail::to_utf8(p.type));
+  m.set_title(p.title.empty() ? std::string(reason_phrase(p.status)) : detail::to_utf8(p.title));
+  m.set_status(static_cast<std::uint32_t>(p.status));
+  m.set_detail(detail::to_utf8(p.detail));
+  if (p.abort_code) m.set_abort_code(detail::abort_code_text(*p.abort_code));
+  if (!correlation.empty()) m.set_correlation_id(detail::to_utf8(correlation));
+  m.SerializeToString(&r.body);
+  r.content_type = "application/x-protobuf";
+  return r;
 }
 
-std::string abort_detail(std::uint32_t code, std::string_view context) {
-  std::string d(canopen::sdo_abort_text(code));
-  if (!context.empty()) {
-    d += ": ";
-    d += context;
-  }
-  return d;
-}
-}  // namespace
-
-ApiReply problem(int status, std::string_view detail_text, const ReplyOptions& opts, std::string_view title,
-                 std::string_view type) {
-  return problem_with(status, detail_text, opts, title, type, std::nullopt);
+Reply encode_result(const core::Result& result, const ReplyOptions& opts) {
+  if (const auto* v = std::get_if<core::SdoValue>(&result)) return sdo_response(v->value, opts);
+  if (const auto* n = std::get_if<core::NmtSent>(&result)) return nmt_response(n->network, n->node, n->command, opts);
+  if (const auto* p = std::get_if<core::Problem>(&result)) return encode_problem(*p, opts);
+  core::Problem none;
+  none.detail = "this result has no reply in this format";
+  return encode_problem(none, opts);
 }
 
-ApiReply bad_request(const canopen::Error& error, const ReplyOptions& opts) {
-  return problem(400, error.detail, opts);
+Reply problem(int status, std::string_view detail_text, const ReplyOptions& opts, std::string_view title,
+              std::string_view type) {
+  core::Problem p;
+  p.status = status;
+  p.detail = std::string(detail_text);
+  p.title = std::string(title);
+  p.type = std::string(type);
+  return encode_problem(p, opts);
 }
 
-ApiReply sdo_abort_problem(std::uint32_t abort_code, std::string_view context, const ReplyOptions& opts) {
-  return problem_with(422, abort_detail(abort_code, context), opts, "SDO abort", {}, abort_code);
+Reply bad_request(const canopen::Error& error, const ReplyOptions& opts) { return problem(400, error.detail, opts); }
+
+Reply sdo_abort_problem(std::uint32_t abort_code, std::string_view context, const ReplyOptions& opts) {
+  return encode_problem(core::sdo_problem(canopen::make_error_code(static_cast<canopen::SdoAbort>(abort_code)), true,
+                                          context),
+                        opts);
 }
 
-ApiReply sdo_error_reply(std::error_code ec, bool remote, std::string_view context, const ReplyOptions& opts) {
-  const std::uint32_t code = canopen::to_abort_code(ec);
-  if (remote) return sdo_abort_problem(code, context, opts);
-  if (code == static_cast<std::uint32_t>(canopen::SdoAbort::Timeout)) {
-    return problem_with(504, abort_detail(code, context), opts, "SDO timeout", {}, code);
-  }
-  return problem_with(502, abort_detail(code, context), opts, "SDO transfer failed", {}, code);
+Reply sdo_error_reply(std::error_code ec, bool remote, std::string_view context, const ReplyOptions& opts) {
+  return encode_problem(core::sdo_problem(ec, remote, context), opts);
 }
 
 }  // namespace gateway

@@ -1,9 +1,10 @@
 // Bodies of SDO and NMT requests and their replies, shared by MQTT and REST
 // (../shared/api-contract.md): request bodies in JSON (proto3 JSON of
 // SdoReadRequest, SdoWriteRequest, NmtRequest, lenient where the contract
-// allows) or binary protobuf are decoded into typed structs, and replies
-// are built as ApiReply (JSON or protobuf; errors as
-// application/problem+json or a protobuf Problem).
+// allows) or binary protobuf are decoded into typed structs, and the
+// request core's results (core/request.hpp) are encoded as a Reply (JSON or
+// protobuf; errors as application/problem+json or a protobuf Problem: the
+// one problem builder, encode_problem).
 //
 // Decoding never throws or crashes on any input; every failure is a Result
 // error whose detail is one line for a 400 reply (see bad_request()).
@@ -27,9 +28,18 @@
 #include "canopen/events.hpp"
 #include "canopen/result.hpp"
 #include "canopen/types.hpp"
-#include "requests.hpp"
+#include "core/request.hpp"
 
 namespace gateway {
+
+// One reply as the transports send it: HTTP status semantics and a body
+// that is the same for REST and MQTT.
+struct Reply {
+  int status = 200;       // 200, 400, 404, 422, 429, 503, 504 ...
+  std::string body;       // JSON (problem+json when status >= 400) or protobuf
+  std::string content_type = "application/json";
+  int retry_after = 0;    // seconds, with 429/503: when to try again (HTTP Retry-After); 0 = not said
+};
 
 struct SdoReadParams {
   std::optional<std::uint16_t> index;  // nullopt when the body had none (REST: from the path)
@@ -67,9 +77,17 @@ canopen::Result<SdoReadParams> parse_sdo_read(std::string_view body, bool protob
 canopen::Result<SdoWriteParams> parse_sdo_write(std::string_view body, bool protobuf, bool require_address = true);
 canopen::Result<NmtParams> parse_nmt(std::string_view body, bool protobuf);
 
+// The same for a JSON body parsed already (parse_json_body): a transport
+// that reads fields of its own from the body first (MQTT 3.1.1's replyTo)
+// parses it once.
+canopen::Result<boost::json::object> parse_json_body(std::string_view body);
+canopen::Result<SdoReadParams> parse_sdo_read(const boost::json::object& body, bool require_address = true);
+canopen::Result<SdoWriteParams> parse_sdo_write(const boost::json::object& body, bool require_address = true);
+canopen::Result<NmtParams> parse_nmt(const boost::json::object& body);
+
 // "start" "stop" "preop" "reset-node" "reset-comm"
-std::string_view nmt_command_name(canopen::NmtCommand c);
-std::optional<canopen::NmtCommand> nmt_command_from_name(std::string_view s);
+using core::nmt_command_from_name;
+using core::nmt_command_name;
 
 // Path or topic text of an object index: "1017", "0x1017" or "1017h" (hex);
 // of a sub-index: decimal or 0x hex. nullopt when malformed or out of range.
@@ -82,24 +100,30 @@ struct ReplyOptions {
 };
 
 // 200 SdoResponse {value, type, raw}. Precondition: holds_its_type(v).
-ApiReply sdo_response(const canopen::Value& v, const ReplyOptions& opts = {});
+Reply sdo_response(const canopen::Value& v, const ReplyOptions& opts = {});
 // 200 NmtResponse {network, node, command}.
-ApiReply nmt_response(std::uint32_t network, std::uint8_t node, canopen::NmtCommand command,
-                      const ReplyOptions& opts = {});
-// A problem reply (RFC 9457): status >= 400; title defaults to the HTTP
-// reason phrase; type "about:blank" unless given.
-ApiReply problem(int status, std::string_view detail, const ReplyOptions& opts = {}, std::string_view title = {},
-                 std::string_view type = {});
+Reply nmt_response(std::uint32_t network, std::uint8_t node, canopen::NmtCommand command,
+                   const ReplyOptions& opts = {});
+// The problem builder (RFC 9457) of every reply: problem+json or a protobuf
+// Problem. Title defaults to the HTTP reason phrase, type to
+// "about:blank"; abortCode when the problem has one; Retry-After as given.
+// The correlation id only when p.command_read (it came in the command's body).
+Reply encode_problem(const core::Problem& p, const ReplyOptions& opts = {});
+// A core result: SdoValue as sdo_response, NmtSent as nmt_response, Problem
+// as encode_problem. The results of REST-only commands (RPDO, SYNC, PDO
+// read) have no message here: the REST layer writes them.
+Reply encode_result(const core::Result& r, const ReplyOptions& opts = {});
+// A problem reply: status >= 400; title and type as encode_problem.
+Reply problem(int status, std::string_view detail, const ReplyOptions& opts = {}, std::string_view title = {},
+              std::string_view type = {});
 // 400 with the parse error's detail.
-ApiReply bad_request(const canopen::Error& error, const ReplyOptions& opts = {});
+Reply bad_request(const canopen::Error& error, const ReplyOptions& opts = {});
 // 422 for an SDO abort: abortCode "0x06020000", detail = the CiA 301 text
 // (": " and `context` appended when given).
-ApiReply sdo_abort_problem(std::uint32_t abort_code, std::string_view context = {}, const ReplyOptions& opts = {});
-// The reply for a failed SDO transfer (TransferResult::error, which is in
-// the SDO abort category): remote (the device sent an abort) -> 422; a
-// local timeout (0x05040000) -> 504; other local failures (malformed
-// response, ...) -> 502. All carry abortCode.
-ApiReply sdo_error_reply(std::error_code ec, bool remote, std::string_view context = {},
-                         const ReplyOptions& opts = {});
+Reply sdo_abort_problem(std::uint32_t abort_code, std::string_view context = {}, const ReplyOptions& opts = {});
+// The reply for a failed SDO transfer (core::sdo_problem): remote (the
+// device sent an abort) -> 422; a local timeout (0x05040000) -> 504; other
+// local failures (malformed response, ...) -> 502. All carry abortCode.
+Reply sdo_error_reply(std::error_code ec, bool remote, std::string_view context = {}, const ReplyOptions& opts = {});
 
 }  // namespace gateway

@@ -1,7 +1,8 @@
 # MQTT transport: a crash-safe disk queue with a memory tier in front
 # (outbound_queue), a stall detector, a sans-I/O MQTT 3.1.1/5 codec and
-# session (session.hpp), a TCP/TLS connection on Boost.Asio, and the
-# publisher (the Asio adapter) that also takes requests (mqtt/publisher.hpp).
+# session (session.hpp), a TCP/TLS connection on Boost.Asio, the publisher
+# (the Asio adapter) and the requests it takes (mqtt/mqtt_requests.hpp:
+# decoded into core::Request, replies encoded from core::Result).
 find_package(OpenSSL REQUIRED)
 include(${CMAKE_CURRENT_LIST_DIR}/codec.cmake)
 add_library(gateway_mqtt STATIC
@@ -10,9 +11,9 @@ add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/stall_detector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/session.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mqtt_connection.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mqtt_requests.cpp)
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_mqtt
-  PUBLIC gateway_lib gateway_mqtt_codec Boost::json OpenSSL::SSL OpenSSL::Crypto
-  PRIVATE gateway_messages  # problem replies as the App and REST build them
+  PUBLIC gateway_lib gateway_mqtt_codec gateway_core_types gateway_messages Boost::json OpenSSL::SSL OpenSSL::Crypto
   PRIVATE canopen_options)

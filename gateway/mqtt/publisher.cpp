@@ -5,16 +5,12 @@
 #include "mqtt/session.hpp"
 #include "mqtt/stall_detector.hpp"
 #include "mqtt/topic_filter.hpp"
-#include "request_codec.hpp"
 
 #include <boost/asio/post.hpp>
 #include <boost/asio/ssl/context.hpp>
 #include <boost/asio/steady_timer.hpp>
-#include <boost/json.hpp>
 
 #include <algorithm>
-#include <cctype>
-#include <charconv>
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
@@ -25,23 +21,6 @@ namespace {
 
 namespace asio = boost::asio;
 namespace json = boost::json;
-
-// "Bearer abc" -> "abc"; a bare token stays as it is.
-std::string_view strip_bearer(std::string_view v) {
-  constexpr std::string_view kBearer = "Bearer ";
-  if (v.size() >= kBearer.size() && std::equal(kBearer.begin(), kBearer.end(), v.begin(), [](char a, char b) {
-        return std::tolower(static_cast<unsigned char>(a)) == std::tolower(static_cast<unsigned char>(b));
-      }))
-    v.remove_prefix(kBearer.size());
-  return v;
-}
-
-template <class T>
-bool parse_decimal(std::string_view s, T& out) {
-  if (s.empty()) return false;
-  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-  return ec == std::errc() && p == s.data() + s.size();
-}
 
 }  // namespace
 
@@ -99,8 +78,8 @@ Session::Options session_options(const MqttConfig& c) {
 // The Asio adapter around the sans-I/O Session: the socket (MqttConnection),
 // the timers, the reconnect backoff, the queue and its storage, stalls.
 struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, SessionEvents {
-  Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestHandler h)
-      : io(io_ctx), cfg(std::move(c)), log(l), handler(std::move(h)), queue(queue_options(cfg)),
+  Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestSink h)
+      : io(io_ctx), cfg(std::move(c)), log(l), on_request(std::move(h)), queue(queue_options(cfg)),
         sync_timer(io_ctx), retry_timer(io_ctx), session_timer(io_ctx), session(session_options(cfg), *this) {
     for (const auto& w : queue.disk().take_warnings()) log.warn("mqtt: queue: " + w);
     uri = normalize_server_uri(cfg.server_uri);
@@ -111,7 +90,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   asio::io_context& io;
   MqttConfig cfg;
   Logger& log;
-  RequestHandler handler;
+  RequestSink on_request;  // mqtt_requests.hpp
   OutboundQueue queue;
   asio::steady_timer sync_timer;
   asio::steady_timer retry_timer;
@@ -388,7 +367,9 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   }
 
   // An incoming PUBLISH can only be a request (the only subscriptions).
-  void on_publish(const codec::Publish& p) override { on_request(p); }
+  void on_publish(const codec::Publish& p) override {
+    if (running && on_request) on_request(p);
+  }
 
   void on_subscribe_refused(std::uint8_t code) override {
     log.warn("mqtt: broker refused a request subscription, code " + std::to_string(code));
@@ -491,183 +472,13 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     schedule_pump();
   }
 
-  // --- requests ---------------------------------------------------------
+  // --- request replies (the requests themselves: mqtt_requests.hpp) -------
 
-  struct ReplyAddress {
-    std::string topic;
-    std::string correlation;           // MQTT 5 correlation data
-    std::optional<json::value> corr_id;  // 3.1.1 correlationId
-    bool v5 = false;
-  };
-
-  // A warning that a flood of bad requests could repeat endlessly: the
-  // first, then at most one per interval, saying how many were left out.
-  struct LogThrottle {
-    static constexpr std::chrono::seconds kInterval{10};
-    std::chrono::steady_clock::time_point last{};
-    bool logged = false;
-    std::uint64_t left_out = 0;
-    void warn(Logger& log, std::string line) {
-      const auto now = std::chrono::steady_clock::now();
-      if (logged && now - last < kInterval) {
-        ++left_out;
-        return;
-      }
-      if (left_out > 0) line += " (and " + std::to_string(left_out) + " more like it since the last such line)";
-      logged = true;
-      last = now;
-      left_out = 0;
-      log.warn(line);
-    }
-  };
-  LogThrottle refused_log;      // reply address refused
-  LogThrottle bad_request_log;  // bad topic (answered 400)
-
-  // Why the reply address is refused ("" = it is not): see publisher.hpp.
-  std::string reply_refusal(const ReplyAddress& addr) const {
-    if (addr.correlation.size() > kMaxCorrelation)
-      return "correlation data of " + std::to_string(addr.correlation.size()) + " bytes (at most " +
-             std::to_string(kMaxCorrelation) + ")";
-    if (addr.corr_id) {
-      const std::size_t n = json::serialize(*addr.corr_id).size();
-      if (n > kMaxCorrelation)
-        return "correlationId of " + std::to_string(n) + " bytes (at most " + std::to_string(kMaxCorrelation) + ")";
-    }
-    if (addr.topic.empty()) return {};
-    if (auto why = reply_topic_refusal(addr.topic, cfg.gateway_id, cfg.reply_topics); !why.empty())
-      return "reply topic '" + addr.topic.substr(0, 200) + "': " + std::string(why);
-    return {};
-  }
-
-  void on_request(const codec::Publish& msg) {
-    if (!running) return;
-    ++counters.requests;
-    const std::string topic(msg.topic);
-    ApiRequest req;
-    ReplyAddress addr;
-    req.body = std::string(msg.payload);
-    const auto& props = msg.props;
-    if (props.response_topic) {
-      addr.topic = std::string(*props.response_topic);
-      addr.v5 = true;
-      if (props.correlation_data) addr.correlation = std::string(*props.correlation_data);
-    }
-    // MQTT 5 user property "authorization": "Bearer <token>" (or the token).
-    for (const auto& u : props.user)
-      if (u.name == "authorization") req.token = std::string(strip_bearer(u.value));
-    if (props.content_type && *props.content_type == "application/x-protobuf") req.protobuf = true;
-    if (!req.protobuf) {
-      // replyTo/correlationId in a JSON body (3.1.1; allowed over 5 too).
-      boost::system::error_code ec;
-      json::value v = json::parse(req.body, ec);
-      if (!ec && v.is_object()) {
-        auto& o = v.as_object();
-        bool changed = false;
-        if (auto* r = o.if_contains("replyTo")) {
-          if (r->is_string() && addr.topic.empty()) addr.topic = std::string(r->as_string());
-          o.erase("replyTo");
-          changed = true;
-        }
-        if (auto* c = o.if_contains("correlationId")) {
-          if (!addr.v5) addr.corr_id = *c;
-          o.erase("correlationId");
-          changed = true;
-        }
-        if (auto* t = o.if_contains("token")) {
-          if (t->is_string() && req.token.empty()) req.token = std::string(strip_bearer(t->as_string()));
-          o.erase("token");
-          changed = true;
-        }
-        if (changed) req.body = json::serialize(o);
-      }
-    }
-    // A refused address gets nothing: a reply there is what must not
-    // happen, and a request nobody may hear the answer to is not executed.
-    if (auto why = reply_refusal(addr); !why.empty()) {
-      ++counters.bad_requests;
-      ++counters.replies_refused;
-      refused_log.warn(log, "mqtt: request on " + topic.substr(0, 200) + " dropped unanswered: " + why);
-      return;
-    }
-
-    // canopen/<gw>/<net>/<node>/sdo/read|write or canopen/<gw>/<net>/<node>/nmt
-    std::string error;
-    if (topic.rfind(prefix, 0) != 0) {
-      error = "not this gateway's request topic";
-    } else {
-      auto parts = topic_levels(std::string_view(topic).substr(prefix.size()));
-      unsigned node = 0;
-      if (parts.size() == 4 && parts[2] == "sdo" && parts[3] == "read") {
-        req.kind = RequestKind::SdoRead;
-      } else if (parts.size() == 4 && parts[2] == "sdo" && parts[3] == "write") {
-        req.kind = RequestKind::SdoWrite;
-      } else if (parts.size() == 3 && parts[2] == "nmt") {
-        req.kind = RequestKind::Nmt;
-      } else {
-        error = "unknown request topic";
-      }
-      if (error.empty() && (!parse_decimal(parts[0], req.network) || req.network == 0))
-        error = "network must be a number from 1";
-      else if (error.empty() && (!parse_decimal(parts[1], node) || node > 127 ||
-                                 (node == 0 && req.kind != RequestKind::Nmt)))
-        error = "node must be 1..127 (0 = all nodes, NMT only)";
-      req.node = static_cast<std::uint8_t>(node);
-    }
-    if (error.empty() && !handler) error = "requests are not served";
-
-    auto reply_fn = make_reply_fn(std::move(addr), topic);
-    if (!error.empty()) {
-      ++counters.bad_requests;
-      bad_request_log.warn(log, "mqtt: request on " + topic.substr(0, 200) + ": " + error);
-      ReplyOptions opts;
-      opts.protobuf = req.protobuf;
-      reply_fn(problem(400, error, opts));
-      return;
-    }
-    handler(req, std::move(reply_fn));
-  }
-
-  ReplyFn make_reply_fn(ReplyAddress addr, std::string request_topic) {
-    auto done = std::make_shared<bool>(false);
-    return [weak = weak_from_this(), addr = std::move(addr), request_topic = std::move(request_topic),
-            done](ApiReply r) {
-      if (*done) return;  // exactly once, whatever the handler does
-      *done = true;
-      if (auto self = weak.lock()) self->send_reply(addr, request_topic, std::move(r));
-    };
-  }
-
-  void send_reply(const ReplyAddress& addr, const std::string& request_topic, ApiReply r) {
-    if (addr.topic.empty()) {
-      log.info("mqtt: request on " + request_topic + " without reply address: status " + std::to_string(r.status));
-      return;
-    }
-    if (!connected || !conn) {
-      ++counters.replies_dropped;
-      log.warn("mqtt: reply to " + addr.topic + " dropped: not connected");
-      return;
-    }
-    std::string body = std::move(r.body);
-    if (addr.corr_id) {
-      boost::system::error_code ec;
-      json::value v = json::parse(body, ec);
-      if (!ec && v.is_object()) {
-        v.as_object()["correlationId"] = *addr.corr_id;
-        body = json::serialize(v);
-      }
-    }
-    const std::string status = std::to_string(r.status);
-    codec::PublishProperties props;
-    if (!addr.correlation.empty()) props.correlation_data = addr.correlation;
-    props.user.push_back({"status", status});
-    if (!r.content_type.empty()) props.content_type = r.content_type;
-    if (send_control(addr.topic, body, false, &props)) {
-      ++counters.replies;
-      conn->flush();  // a reply from a handler completing later has no batch to join
-    } else {
-      ++counters.replies_dropped;
-      log.warn("mqtt: reply to " + addr.topic + " failed: cannot be encoded");
-    }
+  ReplyOutcome send_reply(std::string_view topic, std::string_view body, const codec::PublishProperties& props) {
+    if (!connected || !conn) return ReplyOutcome::not_connected;
+    if (!send_control(topic, body, false, &props)) return ReplyOutcome::not_encodable;
+    conn->flush();  // a reply from a handler completing later has no batch to join
+    return ReplyOutcome::sent;
   }
 
   void stop(std::chrono::milliseconds timeout, const MqttPublisher::Farewell& last) {
@@ -738,8 +549,16 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   }
 };
 
-MqttPublisher::MqttPublisher(asio::io_context& io, MqttConfig cfg, Logger& log, RequestHandler handler)
-    : impl_(std::make_shared<Impl>(io, std::move(cfg), log, std::move(handler))) {}
+MqttPublisher::MqttPublisher(asio::io_context& io, MqttConfig cfg, Logger& log, RequestSink on_request)
+    : impl_(std::make_shared<Impl>(io, std::move(cfg), log, std::move(on_request))) {}
+
+ReplySender MqttPublisher::reply_sender() const {
+  return [weak = std::weak_ptr<Impl>(impl_)](std::string_view topic, std::string_view body,
+                                             const codec::PublishProperties& props) {
+    auto self = weak.lock();
+    return self ? self->send_reply(topic, body, props) : ReplyOutcome::gone;
+  };
+}
 
 MqttPublisher::~MqttPublisher() { impl_->stop(std::chrono::seconds(1), {}); }
 

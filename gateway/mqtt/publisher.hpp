@@ -77,21 +77,10 @@
 // "unsupported protocol version", 0x84, or the 3.1.1 code 1) makes the
 // publisher fall back to 3.1.1 for the rest of its life.
 //
-// Requests: subscribes (QoS 1) to canopen/<gw>/+/+/sdo/read, .../sdo/write
-// and .../nmt. The network and node come from the topic (decimal; node 0
-// only for nmt). Reply address: MQTT 5 response topic + correlation data
-// (copied to the reply, which also carries a user property "status" with the
-// HTTP-style code); otherwise, or over 3.1.1, the JSON body's "replyTo"
-// (string) and "correlationId" (any JSON value): both are removed from the
-// body handed to the handler, and the reply, published to replyTo, gets
-// "correlationId" added when its body is a JSON object. A request without a
-// reply address is still executed, its reply only logged. A reply topic
-// must pass reply_topic_refusal (mqtt/topic_filter.hpp: the contract's
-// default rule, or MqttConfig::reply_topics) and correlation data (or the
-// serialized correlationId) must be at most kMaxCorrelation bytes;
-// otherwise the request is dropped: not executed, not answered, counted in
-// bad_requests and replies_refused, logged at most once per 10 s.
-// A body with MQTT 5 content type "application/x-protobuf" is protobuf.
+// Requests: with accept_requests it subscribes (QoS 1) to request_filters()
+// (topic_filter.hpp) and hands every PUBLISH received to the RequestSink
+// (mqtt_requests.hpp decodes and answers them); replies go out through
+// reply_sender() as QoS 1 PUBLISHes outside the queue, flushed at once.
 //
 // Thread safety: every member function must be called on the thread that
 // runs `io` (the io thread); all state lives there and the publisher starts
@@ -107,6 +96,7 @@
 #include <array>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -115,15 +105,13 @@
 
 #include "event_message.hpp"
 #include "log.hpp"
+#include "mqtt/mqtt_codec.hpp"
 #include "mqtt/mqtt_config.hpp"
+#include "mqtt/mqtt_requests.hpp"
 #include "mqtt/outbound_queue.hpp"
-#include "requests.hpp"
 
 namespace gateway::mqtt {
 
-// Largest MQTT 5 correlation data, or 3.1.1 correlationId as JSON text, a
-// request may carry (the reply echoes it).
-constexpr std::size_t kMaxCorrelation = 1024;
 
 class MqttPublisher {
  public:
@@ -138,11 +126,6 @@ class MqttPublisher {
     std::uint64_t in_flight = 0;
     std::uint64_t connects = 0;         // successful connects
     std::uint64_t reconnects = 0;       // connects after the first
-    std::uint64_t requests = 0;
-    std::uint64_t bad_requests = 0;     // bad topic or reply address
-    std::uint64_t replies_refused = 0;  // requests dropped for their reply address (see Requests)
-    std::uint64_t replies = 0;
-    std::uint64_t replies_dropped = 0;  // not connected when the reply was ready
     std::uint64_t socket_writes = 0;    // send()/write calls on the sockets (batching)
     std::uint64_t stalls = 0;           // StallDetector restarts
     bool storage_failing = false;       // the DiskQueue cannot write (see storage failures)
@@ -150,9 +133,13 @@ class MqttPublisher {
     int mqtt_version = 0;               // of the current connection: 5 or 4
   };
 
+  // Every PUBLISH the broker delivers on a request subscription, on the io
+  // thread (a view, valid during the call only).
+  using RequestSink = std::function<void(const codec::Publish&)>;
+
   // Opens the queue (throws std::system_error) and validates the URI
   // (throws std::invalid_argument). Does not connect: call start().
-  MqttPublisher(boost::asio::io_context& io, MqttConfig cfg, Logger& log, RequestHandler handler = {});
+  MqttPublisher(boost::asio::io_context& io, MqttConfig cfg, Logger& log, RequestSink on_request = {});
   ~MqttPublisher();
   MqttPublisher(const MqttPublisher&) = delete;
   MqttPublisher& operator=(const MqttPublisher&) = delete;
@@ -187,6 +174,10 @@ class MqttPublisher {
   void publish(const EncodedEventPtr& ev, PayloadFormat format);
   void publish(const QueuedMessage& m);
   void publish(const QueuedMessage& m, StorageMode mode);
+
+  // Sends a request's reply now (connected) or says why not. The function
+  // may be kept and called after the publisher is gone (ReplyOutcome::gone).
+  ReplySender reply_sender() const;
 
   Counters counters() const;
   const DiskQueue::Counters& queue_counters() const;     // the disk tier

@@ -1,13 +1,14 @@
 # REST API under /api/v1 (../shared/api-contract.md): routes on the
 # HttpServer that answer from the App's state cache and EDS/DCF files or
-# pass SDO/NMT requests to App::handle_request; /metrics; the OpenAPI
+# decode SDO, NMT, RPDO, SYNC and PDO-read requests for the request core
+# (core/request_core.hpp); /metrics; the OpenAPI
 # document (openapi.json, built into the binary).
 
 # Request decoding that needs no App (path numbers, RPDO body): its own
 # library so the fuzz build links it without the server and the App.
 add_library(gateway_rest_parse STATIC ${CMAKE_CURRENT_LIST_DIR}/rest_parse.cpp)
 target_include_directories(gateway_rest_parse PUBLIC ${CMAKE_CURRENT_LIST_DIR})
-target_link_libraries(gateway_rest_parse PUBLIC canopen_pdo canopen_od gateway_messages
+target_link_libraries(gateway_rest_parse PUBLIC canopen_pdo canopen_od gateway_messages gateway_core_types
                                          PRIVATE Boost::json canopen_json canopen_options)
 
 file(READ ${CMAKE_CURRENT_LIST_DIR}/openapi.json GATEWAY_OPENAPI_JSON)
@@ -19,5 +20,5 @@ add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/api_routes.cpp
   ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp)
 target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR})
-target_link_libraries(gateway_rest PUBLIC gateway_app gateway_http gateway_messages gateway_edstool
+target_link_libraries(gateway_rest PUBLIC gateway_app gateway_core gateway_http gateway_messages gateway_edstool
                                    PRIVATE gateway_rest_parse gateway_metrics Boost::json canopen_json canopen_options)

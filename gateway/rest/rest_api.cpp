@@ -14,6 +14,8 @@
 #include "canopen/pdo/remote_config.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "auth.hpp"
+#include "core/format.hpp"
+#include "core/request_core.hpp"
 #include "canopen_gateway.pb.h"
 #include "eds_report.hpp"
 #include "google/protobuf/util/json_util.h"
@@ -45,7 +47,7 @@ bool accepts_only_protobuf(const Request& r) {
          !contains(accept, "application/*");
 }
 
-Response from_reply(ApiReply reply) {
+Response from_reply(Reply reply) {
   Response r;
   r.status = reply.status;
   r.content_type = std::move(reply.content_type);
@@ -64,7 +66,7 @@ Response json_response(const json::value& v, int status = 200) { return Response
 
 using rest::parse_decimal;
 
-std::string hex_text(std::span<const std::uint8_t> bytes) { return detail::to_hex(bytes); }
+std::string hex_text(std::span<const std::uint8_t> bytes) { return core::hex_bytes(bytes); }
 
 std::string timestamp_text(WallTime t) {
   std::string out;
@@ -94,14 +96,6 @@ std::optional<Response> check_node(const Request& req, std::uint8_t& node, bool 
                                 std::string(req.param("node")) + "'",
                             protobuf);
   node = static_cast<std::uint8_t>(*n);
-  return std::nullopt;
-}
-
-std::optional<Response> check_bus(const App& app, std::uint32_t net, bool protobuf = false) {
-  const auto state = app.bus_state(net);
-  if (state && (*state == canopen::can::BusState::BusOff || *state == canopen::can::BusState::Down))
-    return problem_response(503, "network " + std::to_string(net) + " is " + std::string(canopen::can::to_string(*state)),
-                            protobuf);
   return std::nullopt;
 }
 
@@ -341,146 +335,181 @@ void get_emcy(App& app, const Request& req, Responder respond) {
   respond(json_response(o));
 }
 
-// SDO read/write: the path's index/sub (and ?type=) go into the body App understands.
+// ---- requests for the request core -------------------------------------------
+// The path and body decode into one core::Request; the core answers it
+// (ranges, roles, limits, audit) and the result is encoded here.
+
 // The caller as the HTTP authorizer established it. Without an authorizer
 // the server is open, and the request is too.
-void caller(const Request& req, ApiRequest& api) {
-  api.authenticated = true;
-  api.who = req.who;
-  api.caller = req.caller.empty() ? auth::address_caller(auth::peer_address(req.peer)) : req.caller;
-  api.role = req.authorized ? static_cast<Role>(req.role) : Role::Admin;
+core::Caller rest_caller(const Request& req) {
+  core::Caller c;
+  c.transport = core::Transport::rest;
+  c.authenticated = true;
+  c.who = req.who;
+  c.key = req.caller.empty() ? auth::address_caller(auth::peer_address(req.peer)) : req.caller;
+  c.role = req.authorized ? static_cast<Role>(req.role) : Role::Admin;
+  return c;
 }
 
-void sdo(App& app, bool write, const Request& req, Responder respond) {
-  const bool reply_proto = accepts_protobuf(req) || sends_protobuf(req);
-  std::uint32_t net = 0;
-  std::uint8_t node = 0;
-  if (auto err = check_net(app, req, net, reply_proto)) return respond(std::move(*err));
-  if (auto err = check_node(req, node, false, reply_proto)) return respond(std::move(*err));
+// The network of the path: its number (the core checks that it exists), or
+// the 400 for one that is not a number.
+std::optional<std::uint32_t> path_network(const Request& req, Responder& respond, bool protobuf = false) {
+  auto n = parse_decimal(req.param("net"));
+  if (!n) respond(problem_response(400, "network must be a decimal number, not '" + std::string(req.param("net")) + "'",
+                                   protobuf));
+  return n;
+}
+
+// The node of the path, or the detail of its 400.
+std::optional<std::uint8_t> path_node(const Request& req, bool allow_zero, std::string& error) {
+  auto n = parse_decimal(req.param("node"));
+  if (!n || *n > 127 || (*n == 0 && !allow_zero)) {
+    error = "node-ID must be " + std::string(allow_zero ? "0..127" : "1..127") + ", not '" +
+            std::string(req.param("node")) + "'";
+    return std::nullopt;
+  }
+  return static_cast<std::uint8_t>(*n);
+}
+
+core::Request core_request(const Request& req, std::uint32_t net, core::Command command) {
+  core::Request r;
+  r.caller = rest_caller(req);
+  r.network = net;
+  r.command = std::move(command);
+  r.check_bus = true;  // REST answers 503 while the bus is off or down
+  return r;
+}
+
+core::Undecodable undecodable(core::Operation op, std::uint8_t node, std::string detail, bool in_address) {
+  return core::Undecodable{op, node, std::move(detail), in_address};
+}
+
+// The command of an SDO request: path (index, sub, ?type=) and, for a
+// write, the body; the correlation id a write body carries goes to `opts`.
+core::Command sdo_command(bool write, const Request& req, std::uint8_t node, ReplyOptions& opts) {
+  const auto op = write ? core::Operation::sdo_write : core::Operation::sdo_read;
   const auto index = parse_index_text(req.param("index"));
   if (!index)
-    return respond(problem_response(400, "object index must be hex (1017, 0x1017 or 1017h), not '" +
-                                             std::string(req.param("index")) + "'", reply_proto));
+    return undecodable(op, node, "object index must be hex (1017, 0x1017 or 1017h), not '" +
+                                     std::string(req.param("index")) + "'", true);
   const auto sub = parse_sub_index_text(req.param("sub"));
   if (!sub)
-    return respond(problem_response(400, "sub-index must be 0..255 (decimal or 0x hex), not '" +
-                                             std::string(req.param("sub")) + "'", reply_proto));
-  std::string type;
+    return undecodable(op, node, "sub-index must be 0..255 (decimal or 0x hex), not '" +
+                                     std::string(req.param("sub")) + "'", true);
+  std::optional<canopen::DataType> type;
   if (auto t = req.query_param("type")) {
-    if (!canopen::parse_type_name(*t))
-      return respond(problem_response(400, "unknown type '" + std::string(*t) + "'", reply_proto));
-    type = std::string(*t);
+    type = canopen::parse_type_name(*t);
+    if (!type) return undecodable(op, node, "unknown type '" + std::string(*t) + "'", true);
   }
-  if (auto err = check_bus(app, net, reply_proto)) return respond(std::move(*err));
+  if (!write) return core::SdoRead{node, *index, *sub, type};
 
-  ApiRequest api;
-  api.kind = write ? RequestKind::SdoWrite : RequestKind::SdoRead;
-  api.network = net;
-  api.node = node;
-  api.protobuf = reply_proto;
-  caller(req, api);
-  if (!write) {
-    if (reply_proto) {
-      canopen::gateway::v1::SdoReadRequest m;
-      m.set_index(*index);
-      m.set_sub_index(*sub);
-      m.set_type(type);
-      api.body = m.SerializeAsString();
-    } else {
-      json::object o;
-      o["index"] = *index;
-      o["subIndex"] = *sub;
-      if (!type.empty()) o["type"] = type;
-      api.body = json::serialize(o);
-    }
-  } else if (sends_protobuf(req)) {
+  canopen::Result<SdoWriteParams> params = canopen::Error{};
+  if (sends_protobuf(req)) {
     canopen::gateway::v1::SdoWriteRequest m;
-    if (!m.ParseFromString(req.body))
-      return respond(problem_response(400, "the body is not a protobuf SdoWriteRequest", true));
+    if (!m.ParseFromString(req.body)) return undecodable(op, node, "the body is not a protobuf SdoWriteRequest", false);
     m.set_index(*index);
     m.set_sub_index(*sub);
-    if (!type.empty()) m.set_type(type);
-    api.body = m.SerializeAsString();
+    if (type) m.set_type(std::string(req.query_param("type").value_or("")));
+    params = parse_sdo_write(m.SerializeAsString(), true);
   } else {
     boost::system::error_code ec;
     auto body = json::parse(req.body, ec);
     if (ec || !body.is_object())
-      return respond(problem_response(400, "the body must be a JSON object {\"value\": ..., \"type\": ...}", reply_proto));
+      return undecodable(op, node, "the body must be a JSON object {\"value\": ..., \"type\": ...}", false);
     auto& o = body.as_object();
     for (const char* k : {"index", "subIndex", "sub_index"}) o.erase(k);
     o["index"] = *index;
     o["subIndex"] = *sub;
-    if (!type.empty()) o["type"] = type;
-    if (reply_proto) {
+    if (type) o["type"] = std::string(req.query_param("type").value_or(""));
+    if (opts.protobuf) {
+      // A JSON body with a protobuf reply reads as the protobuf message would.
       canopen::gateway::v1::SdoWriteRequest m;
       if (!google::protobuf::util::JsonStringToMessage(json::serialize(o), &m).ok())
-        return respond(problem_response(400, "the body is not an SDO write request {\"value\": ..., \"type\": ...}",
-                                        true));
-      api.body = m.SerializeAsString();
+        return undecodable(op, node, "the body is not an SDO write request {\"value\": ..., \"type\": ...}", false);
+      params = parse_sdo_write(m.SerializeAsString(), true);
     } else {
-      api.body = json::serialize(o);
+      params = parse_sdo_write(o);
     }
   }
-  app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
+  if (!params) return undecodable(op, node, params.error().detail, false);
+  opts.correlation_id = params->correlation_id;
+  return core::SdoWrite{node, *params->index, *params->sub, params->type, std::move(params->value)};
+}
+
+// Executes a decoded request and answers with its result (SDO and NMT:
+// JSON or protobuf as `opts` say).
+void execute(App& app, core::Request request, ReplyOptions opts, Responder respond) {
+  app.requests().execute(std::move(request), [respond, opts](core::Result result) {
+    respond(from_reply(encode_result(result, opts)));
+  });
+}
+
+void sdo(App& app, bool write, const Request& req, Responder respond) {
+  ReplyOptions opts;
+  opts.protobuf = accepts_protobuf(req) || sends_protobuf(req);
+  const auto net = path_network(req, respond, opts.protobuf);
+  if (!net) return;
+  std::string error;
+  const auto node = path_node(req, false, error);
+  auto command = node ? sdo_command(write, req, *node, opts)
+                      : core::Command{undecodable(write ? core::Operation::sdo_write : core::Operation::sdo_read, 0,
+                                                  error, true)};
+  execute(app, core_request(req, *net, std::move(command)), std::move(opts), std::move(respond));
 }
 
 void nmt(App& app, const Request& req, Responder respond) {
-  const bool proto = sends_protobuf(req);
-  std::uint32_t net = 0;
-  std::uint8_t node = 0;
-  if (auto err = check_net(app, req, net, proto)) return respond(std::move(*err));
-  if (auto err = check_node(req, node, true, proto)) return respond(std::move(*err));
-  if (auto err = check_bus(app, net, proto)) return respond(std::move(*err));
-  ApiRequest api;
-  api.kind = RequestKind::Nmt;
-  api.network = net;
-  api.node = node;
-  api.protobuf = proto;
-  caller(req, api);
-  api.body = req.body;
-  app.handle_request(api, [respond](ApiReply reply) { respond(from_reply(std::move(reply))); });
+  ReplyOptions opts;
+  opts.protobuf = sends_protobuf(req);
+  const auto net = path_network(req, respond, opts.protobuf);
+  if (!net) return;
+  std::string error;
+  const auto node = path_node(req, true, error);
+  core::Command command = undecodable(core::Operation::nmt, 0, error, true);
+  if (node) {
+    auto params = parse_nmt(req.body, opts.protobuf);
+    if (params) {
+      opts.correlation_id = params->correlation_id;
+      command = core::Nmt{*node, params->command};
+    } else {
+      command = undecodable(core::Operation::nmt, *node, params.error().detail, false);
+    }
+  }
+  execute(app, core_request(req, *net, std::move(command)), std::move(opts), std::move(respond));
+}
+
+// The result of a JSON-only command: `ok` writes the success.
+template <typename Success, typename Ok>
+core::RequestCore::Done json_result(Responder respond, Ok ok) {
+  return [respond, ok](core::Result result) {
+    if (const auto* s = std::get_if<Success>(&result)) return respond(json_response(ok(*s)));
+    if (const auto* p = std::get_if<core::Problem>(&result)) return respond(from_reply(encode_problem(*p)));
+    respond(problem_response(500, "unexpected result"));
+  };
 }
 
 void rpdo(App& app, const Request& req, Responder respond) {
-  std::uint32_t net = 0;
-  std::uint8_t node = 0;
-  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
-  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
-  const auto number = parse_decimal(req.param("n"));
-  if (!number || *number == 0 || *number > 512)
-    return respond(problem_response(400, "RPDO number must be 1..512, not '" + std::string(req.param("n")) + "'"));
-  const auto* desc = app.description(net, node);
-  const std::string what = "node " + std::to_string(node) + " RPDO" + std::to_string(*number);
-  if (desc == nullptr)
-    return respond(problem_response(404, "node " + std::to_string(node) + " has no EDS/DCF, so its RPDOs are unknown"));
-  // The configuration in effect: the EDS/DCF's unless SDO writes or a read
-  // from the device changed it (GET .../pdo shows it).
-  const auto* in_effect = app.rpdo_config(net, node, static_cast<std::uint16_t>(*number));
-  if (in_effect == nullptr)
-    return respond(problem_response(404, what + " is not in use (not in its EDS/DCF, disabled by COB-ID bit 31, or "
-                                           "its mapping does not resolve; see GET .../pdo)"));
-  const canopen::pdo::PdoConfig cfg = *in_effect;  // a copy: the pointer lives only until the next change
-
+  const auto net = path_network(req, respond);
+  if (!net) return;
   std::string error;
-  auto body = rest::parse_rpdo_body(req.body, cfg, desc->od, what, error);
-  if (!body) return respond(problem_response(400, error));
-  const auto& values = body->values;
-  const auto& raw = body->raw;
-  if (auto err = check_bus(app, net)) return respond(std::move(*err));
-  canopen::Bytes sent;
-  if (auto wec = app.write_rpdo(net, node, static_cast<std::uint16_t>(*number), values, raw ? &*raw : nullptr, &sent,
-                                req.who)) {
-    const int status = wec == make_error_code(canopen::SdoAbort::NoSuchObject) ? 404 : 400;
-    return respond(problem_response(status, what + ": " + wec.message()));
-  }
-  json::object out;
-  out["network"] = net;
-  out["node"] = node;
-  out["rpdo"] = *number;
-  out["cobId"] = cfg.comm.cob_id.can_id();
-  out["transmissionType"] = cfg.comm.transmission_type;
-  out["raw"] = hex_text(sent);
-  respond(json_response(out));
+  const auto node = path_node(req, false, error);
+  const auto number = parse_decimal(req.param("n"));
+  core::Command command = undecodable(core::Operation::rpdo_write, 0, error, true);
+  if (node && (!number || *number == 0 || *number > 512))
+    command = undecodable(core::Operation::rpdo_write, *node,
+                          "RPDO number must be 1..512, not '" + std::string(req.param("n")) + "'", true);
+  else if (node)
+    command = core::RpdoWrite{*node, static_cast<std::uint16_t>(*number), req.body};
+  app.requests().execute(core_request(req, *net, std::move(command)),
+                         json_result<core::RpdoSent>(std::move(respond), [](const core::RpdoSent& s) {
+                           json::object out;
+                           out["network"] = s.network;
+                           out["node"] = s.node;
+                           out["rpdo"] = s.number;
+                           out["cobId"] = s.cob_id;
+                           out["transmissionType"] = s.transmission_type;
+                           out["raw"] = hex_text(s.raw);
+                           return out;
+                         }));
 }
 
 // ---- PDO configuration in effect (issue 11) ----------------------------------
@@ -573,23 +602,18 @@ void get_pdo(App& app, const Request& req, Responder respond) {
 }
 
 void read_pdo(App& app, const Request& req, Responder respond) {
-  std::uint32_t net = 0;
-  std::uint8_t node = 0;
-  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
-  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
-  std::optional<Response> err;
-  if (node_pdo_table(app, net, node, err) == nullptr) return respond(std::move(*err));
-  if (auto bus = check_bus(app, net)) return respond(std::move(*bus));
-  auto ec = app.read_pdo_config(
-      net, node,
-      [a = &app, net, node, respond](const canopen::pdo::PdoReadReport& r) {
-        if (r.cancelled) return respond(problem_response(503, "node " + std::to_string(node) + " booted during the read; " + r.summary()));
-        if (r.stopped) {
-          const int status = r.stopped == make_error_code(canopen::SdoAbort::Timeout) ? 504 : 502;
-          return respond(problem_response(status, r.summary()));
-        }
+  const auto net = path_network(req, respond);
+  if (!net) return;
+  std::string error;
+  const auto node = path_node(req, false, error);
+  core::Command command = undecodable(core::Operation::pdo_config_read, 0, error, true);
+  if (node) command = core::PdoConfigRead{*node};
+  App* a = &app;
+  app.requests().execute(
+      core_request(req, *net, std::move(command)),
+      json_result<core::PdoConfigReport>(std::move(respond), [a](const core::PdoConfigReport& report) {
         json::array read;
-        for (const auto& p : r.pdos) {
+        for (const auto& p : report.report.pdos) {
           json::object o;
           o["direction"] = direction_text(p.key.direction);
           o["number"] = p.key.number;
@@ -603,39 +627,38 @@ void read_pdo(App& app, const Request& req, Responder respond) {
           read.push_back(std::move(o));
         }
         json::object out;
-        out["network"] = net;
-        out["node"] = node;
-        out["summary"] = r.summary();
+        out["network"] = report.network;
+        out["node"] = report.node;
+        out["summary"] = report.report.summary();
         out["read"] = std::move(read);
-        out["pdos"] = pdos_json(*a->pdo_config(net), node);
-        respond(json_response(out));
-      },
-      req.who);
-  if (ec == make_error_code(canopen::SdoAbort::NoSdoConnection))
-    return respond(problem_response(429, "too many SDO requests queued for node " + std::to_string(node)));
-  if (ec) respond(problem_response(404, "node " + std::to_string(node) + ": " + ec.message()));
+        out["pdos"] = pdos_json(*a->pdo_config(report.network), report.node);
+        return out;
+      }));
 }
 
 void sync(App& app, const Request& req, Responder respond) {
-  std::uint32_t net = 0;
-  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
-  std::optional<std::uint8_t> counter;
+  const auto net = path_network(req, respond);
+  if (!net) return;
+  core::Command command = core::Sync{};
   if (req.body.find_first_not_of(" \t\r\n") != std::string::npos) {
     boost::system::error_code ec;
     auto body = json::parse(req.body, ec);
-    if (ec || !body.is_object()) return respond(problem_response(400, "the body must be a JSON object {\"counter\": n}"));
-    if (const auto* c = body.as_object().if_contains("counter"); c != nullptr && !c->is_null()) {
+    if (ec || !body.is_object()) {
+      command = undecodable(core::Operation::sync, 0, "the body must be a JSON object {\"counter\": n}", false);
+    } else if (const auto* c = body.as_object().if_contains("counter"); c != nullptr && !c->is_null()) {
       if (!c->is_int64() || c->as_int64() < 1 || c->as_int64() > 240)
-        return respond(problem_response(400, "\"counter\" must be 1..240"));
-      counter = static_cast<std::uint8_t>(c->as_int64());
+        command = undecodable(core::Operation::sync, 0, "\"counter\" must be 1..240", false);
+      else
+        command = core::Sync{static_cast<std::uint8_t>(c->as_int64())};
     }
   }
-  if (auto err = check_bus(app, net)) return respond(std::move(*err));
-  app.send_sync(net, counter, req.who);
-  json::object out;
-  out["network"] = net;
-  out["counter"] = counter ? json::value(*counter) : json::value(nullptr);
-  respond(json_response(out));
+  app.requests().execute(core_request(req, *net, std::move(command)),
+                         json_result<core::SyncSent>(std::move(respond), [](const core::SyncSent& s) {
+                           json::object out;
+                           out["network"] = s.network;
+                           out["counter"] = s.counter ? json::value(*s.counter) : json::value(nullptr);
+                           return out;
+                         }));
 }
 
 }  // namespace

@@ -29,14 +29,6 @@ std::optional<std::uint8_t> json_sub(const json::value& v) {
 
 }  // namespace
 
-std::optional<std::uint32_t> parse_decimal(std::string_view s) {
-  std::uint32_t v = 0;
-  if (s.empty() || s.size() > 9) return std::nullopt;
-  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc{} || p != s.data() + s.size()) return std::nullopt;
-  return v;
-}
-
 std::optional<canopen::Bytes> parse_hex(std::string_view s) {
   canopen::Bytes out;
   int nibble = -1;

@@ -16,11 +16,12 @@
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/types.hpp"
+#include "core/format.hpp"
 
 namespace gateway::rest {
 
 // Decimal path number ("1", "127"): at most 9 digits, nothing else.
-std::optional<std::uint32_t> parse_decimal(std::string_view s);
+using core::parse_decimal;
 
 // Hex bytes ("0f00", "0F 00"); spaces are ignored, an odd digit count is
 // malformed.

@@ -1,8 +1,9 @@
-// App::handle_request's per-caller limits (issue 12, items 8 and 12), on the
+// The request core's per-caller limits (issue 12, items 8 and 12), on the
 // simulated demo network in-process: who may queue how much on a node, MQTT
 // requests rate-limited per caller as HTTP ones are per address, and
 // tokenless MQTT requests refused unless mqtt.requests-role says otherwise.
 #include "app.hpp"
+#include "request_codec.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -45,11 +46,11 @@ struct Rig {
     return n != nullptr && n->state == canopen::NmtState::Operational;
   }
 
-  // Hands a request to the App and returns where its reply will be (set at
-  // once for a refusal, later for an SDO transfer).
-  std::shared_ptr<std::optional<ApiReply>> send(ApiRequest r) {
-    auto out = std::make_shared<std::optional<ApiReply>>();
-    app->handle_request(r, [out](ApiReply reply) { *out = std::move(reply); });
+  // Hands a request to the App's request core and returns where its reply
+  // will be (set at once for a refusal, later for an SDO transfer).
+  std::shared_ptr<std::optional<Reply>> send(core::Request r) {
+    auto out = std::make_shared<std::optional<Reply>>();
+    app->requests().execute(std::move(r), [out](core::Result result) { *out = encode_result(result); });
     return out;
   }
 
@@ -60,27 +61,27 @@ struct Rig {
 
 // An SDO read of 1018h sub 1 (the vendor-ID), typed so that nodes without an
 // EDS are asked too.
-ApiRequest read_request(std::uint8_t node) {
-  ApiRequest r;
-  r.kind = RequestKind::SdoRead;
+core::Request read_request(std::uint8_t node) {
+  core::Request r;
   r.network = 1;
-  r.node = node;
-  r.body = R"({"index":"1018","subIndex":1,"type":"u32"})";
+  r.command = core::SdoRead{node, 0x1018, 1, canopen::DataType::Unsigned32};
   return r;
 }
 
 // As REST hands it over: the HTTP authorizer checked the caller.
-ApiRequest from_http(ApiRequest r, std::string caller, Role role = Role::Viewer) {
-  r.authenticated = true;
-  r.role = role;
-  r.who = caller;
-  r.caller = std::move(caller);
+core::Request from_http(core::Request r, std::string caller, Role role = Role::Viewer) {
+  r.caller.transport = core::Transport::rest;
+  r.caller.authenticated = true;
+  r.caller.role = role;
+  r.caller.who = caller;
+  r.caller.key = std::move(caller);
   return r;
 }
 
-// As the MQTT publisher hands it over: a token, or none.
-ApiRequest from_mqtt(ApiRequest r, std::string token = {}) {
-  r.token = std::move(token);
+// As the MQTT unit hands it over: a token, or none.
+core::Request from_mqtt(core::Request r, std::string token = {}) {
+  r.caller.transport = core::Transport::mqtt;
+  r.caller.token = std::move(token);
   return r;
 }
 
@@ -97,7 +98,7 @@ TEST(AppRequests, OneCallerFillsItsShareOfASilentNodesQueueOthersStillGetIn) {
   constexpr std::uint8_t kSilent = 42;  // no device answers: every request waits for its timeout
   const std::size_t share = auth::caller_share(canopen::sdo::ClientConfig{}.queue_limit);
   ASSERT_EQ(share, 8u);  // max(2, 32 / 4)
-  std::vector<std::shared_ptr<std::optional<ApiReply>>> mine;
+  std::vector<std::shared_ptr<std::optional<Reply>>> mine;
   for (std::size_t i = 0; i < share; ++i)
     mine.push_back(rig.send(from_http(read_request(kSilent), "address 10.0.0.7")));
   for (const auto& r : mine) EXPECT_FALSE(r->has_value()) << "queued, waiting for the silent node";
@@ -126,9 +127,9 @@ TEST(AppRequests, OneCallerFillsItsShareOfASilentNodesQueueOthersStillGetIn) {
 TEST(AppRequests, SharesAreGivenBackAndEveryCallerIsServed) {
   Rig rig;
   ASSERT_TRUE(rig.run_until([&] { return rig.operational(5); }));
-  std::vector<std::shared_ptr<std::optional<ApiReply>>> mine;
+  std::vector<std::shared_ptr<std::optional<Reply>>> mine;
   for (int i = 0; i < 8; ++i) mine.push_back(rig.send(from_http(read_request(5), "address 10.0.0.7")));
-  EXPECT_EQ(rig.send(from_http(read_request(5), "address 10.0.0.7"))->value_or(ApiReply{}).status, 429);
+  EXPECT_EQ(rig.send(from_http(read_request(5), "address 10.0.0.7"))->value_or(Reply{}).status, 429);
   const auto other = rig.send(from_http(read_request(5), "address 10.0.0.8"));
   auto all_answered = [&] { return std::all_of(mine.begin(), mine.end(), [](const auto& r) { return r->has_value(); }); };
   ASSERT_TRUE(rig.run_until([&] { return other->has_value() && all_answered(); }));
@@ -152,7 +153,7 @@ TEST(AppRequests, MqttRequestsAreRateLimitedPerCaller) {
     c.http.rate_burst = 3;
   });
   // The gateway's own node answers from its dictionary at once: no bus, no waiting.
-  const ApiRequest own = read_request(127);
+  const core::Request own = read_request(127);
   int ok = 0, limited = 0;
   for (int i = 0; i < 5; ++i) {
     const auto r = rig.send(from_mqtt(own));
@@ -166,14 +167,14 @@ TEST(AppRequests, MqttRequestsAreRateLimitedPerCaller) {
   }
   EXPECT_EQ(ok, 3) << "the burst";
   EXPECT_EQ(limited, 2);
-  EXPECT_EQ(rig.send(from_mqtt(own, "not-a-token"))->value_or(ApiReply{}).status, 429) << "bad tokens share the bucket";
+  EXPECT_EQ(rig.send(from_mqtt(own, "not-a-token"))->value_or(Reply{}).status, 429) << "bad tokens share the bucket";
   // A token holder has its own bucket.
-  for (int i = 0; i < 3; ++i) EXPECT_EQ(rig.send(from_mqtt(own, kViewerToken))->value_or(ApiReply{}).status, 200);
-  EXPECT_EQ(rig.send(from_mqtt(own, kViewerToken))->value_or(ApiReply{}).status, 429);
-  EXPECT_EQ(rig.send(from_mqtt(own, kOperatorToken))->value_or(ApiReply{}).status, 200);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(rig.send(from_mqtt(own, kViewerToken))->value_or(Reply{}).status, 200);
+  EXPECT_EQ(rig.send(from_mqtt(own, kViewerToken))->value_or(Reply{}).status, 429);
+  EXPECT_EQ(rig.send(from_mqtt(own, kOperatorToken))->value_or(Reply{}).status, 200);
   // REST requests were limited by the HTTP authorizer already; not again here.
   for (int i = 0; i < 5; ++i)
-    EXPECT_EQ(rig.send(from_http(own, "address 10.0.0.7"))->value_or(ApiReply{}).status, 200);
+    EXPECT_EQ(rig.send(from_http(own, "address 10.0.0.7"))->value_or(Reply{}).status, 200);
   EXPECT_EQ(rig.app->counters().requests_rate_limited, 4u);
 }
 

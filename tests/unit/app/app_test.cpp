@@ -1,7 +1,7 @@
 // The gateway process on the simulated demo network, in-process: simulated
 // devices boot, are identified and started, their TPDOs decoded into the
 // state cache and the event pipeline; SDO and NMT requests get their replies
-// (the same path MQTT and REST use). No CAN, no broker.
+// (the same path MQTT and REST use: the request core). No CAN, no broker.
 #include "app.hpp"
 
 #include <gmock/gmock.h>
@@ -14,6 +14,8 @@
 #include "canopen/can/memory_bus.hpp"
 
 #include "canopen/pdo/remote_config.hpp"
+#include "request_codec.hpp"
+#include "support/mqtt_request.hpp"
 
 namespace gateway {
 namespace {
@@ -46,16 +48,16 @@ struct DemoRig {
     return pred();
   }
 
-  ApiReply request(RequestKind kind, std::uint8_t node, std::string body, std::uint32_t net = 1) {
-    std::optional<ApiReply> out;
-    ApiRequest r;
-    r.kind = kind;
-    r.network = net;
-    r.node = node;
-    r.body = std::move(body);
-    app->handle_request(r, [&](ApiReply reply) { out = std::move(reply); });
+  // A request as MQTT decodes it, executed by the App's request core, its
+  // result encoded as the MQTT (and REST) reply.
+  Reply request(core::Operation op, std::uint8_t node, std::string body, std::uint32_t net = 1) {
+    std::optional<Reply> out;
+    auto d = ::test::mqtt_request(op, net, node, body);
+    EXPECT_TRUE(d.error.empty()) << d.error;
+    app->requests().execute(std::move(d.request),
+                            [&, opts = d.options](core::Result r) { out = encode_result(r, opts); });
     EXPECT_TRUE(run_until([&] { return out.has_value(); })) << "no reply";
-    return out.value_or(ApiReply{0, "", ""});
+    return out.value_or(Reply{0, "", ""});
   }
 
   boost::asio::io_context io;
@@ -126,7 +128,7 @@ TEST(AppDemo, PdosCarryProtobufWhileAConsumerWantsIt) {
 TEST(AppDemo, SdoReadIsTypedFromTheEds) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
-  const auto reply = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x1000", "subIndex": 0})");
+  const auto reply = rig.request(core::Operation::sdo_read, 5, R"({"index": "0x1000", "subIndex": 0})");
   ASSERT_EQ(reply.status, 200) << reply.body;
   const auto json = boost::json::parse(reply.body).as_object();
   EXPECT_EQ(json.at("type").as_string(), "u32");
@@ -156,18 +158,18 @@ TEST(AppDemo, SdoReadOfAFixedSizeObjectUsesANormalUpload_7_2_4_3_13) {
     return b;
   };
 
-  const auto status = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x6041", "subIndex": 0})");
+  const auto status = rig.request(core::Operation::sdo_read, 5, R"({"index": "0x6041", "subIndex": 0})");
   ASSERT_EQ(status.status, 200) << status.body;
   EXPECT_EQ(requests.size(), 1U) << "one expedited round trip";
   EXPECT_EQ(first_request(), (std::vector<unsigned>{0x40, 0x41, 0x60, 0x00, 0x00, 0x00}));
 
   requests.clear();
-  const auto typed = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x5FFF", "subIndex": 0, "type": "u32"})");
+  const auto typed = rig.request(core::Operation::sdo_read, 5, R"({"index": "0x5FFF", "subIndex": 0, "type": "u32"})");
   EXPECT_EQ(typed.status, 422) << typed.body;
   EXPECT_EQ(first_request(), (std::vector<unsigned>{0x40, 0xFF, 0x5F, 0x00, 0x00, 0x00}));
 
   requests.clear();
-  const auto name = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x1008", "subIndex": 0})");
+  const auto name = rig.request(core::Operation::sdo_read, 5, R"({"index": "0x1008", "subIndex": 0})");
   ASSERT_EQ(name.status, 200) << name.body;
   EXPECT_THAT(name.body, HasSubstr("SD-402"));
   EXPECT_EQ(first_request(), (std::vector<unsigned>{0xA4, 0x08, 0x10, 0x00, 0x7F, 0x40}));
@@ -177,44 +179,44 @@ TEST(AppDemo, SdoErrorsMapToStatusCodes) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
   // Not in the EDS: 404 without ?type=.
-  EXPECT_EQ(rig.request(RequestKind::SdoRead, 5, R"({"index": "0x5FFF", "subIndex": 0})").status, 404);
+  EXPECT_EQ(rig.request(core::Operation::sdo_read, 5, R"({"index": "0x5FFF", "subIndex": 0})").status, 404);
   // With a type the device is asked, and it aborts: 422 with the abort code.
-  auto abort = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x5FFF", "subIndex": 0, "type": "u8"})");
+  auto abort = rig.request(core::Operation::sdo_read, 5, R"({"index": "0x5FFF", "subIndex": 0, "type": "u8"})");
   EXPECT_EQ(abort.status, 422) << abort.body;
   EXPECT_THAT(abort.body, HasSubstr("0x06020000"));
   // A node nobody answers for: 504 after the SDO timeout.
-  EXPECT_EQ(rig.request(RequestKind::SdoRead, 42, R"({"index": "0x1000", "subIndex": 0, "type": "u32"})").status, 504);
+  EXPECT_EQ(rig.request(core::Operation::sdo_read, 42, R"({"index": "0x1000", "subIndex": 0, "type": "u32"})").status, 504);
   // Out of range for the type: 400 before anything goes on the bus.
-  EXPECT_EQ(rig.request(RequestKind::SdoWrite, 5, R"({"index": "0x6060", "subIndex": 0, "value": 300})").status, 400);
+  EXPECT_EQ(rig.request(core::Operation::sdo_write, 5, R"({"index": "0x6060", "subIndex": 0, "value": 300})").status, 400);
   // Unknown network: 404.
-  EXPECT_EQ(rig.request(RequestKind::SdoRead, 5, R"({"index": "0x1000", "subIndex": 0})", 9).status, 404);
+  EXPECT_EQ(rig.request(core::Operation::sdo_read, 5, R"({"index": "0x1000", "subIndex": 0})", 9).status, 404);
   // Malformed body: 400.
-  EXPECT_EQ(rig.request(RequestKind::SdoRead, 5, R"({"index": )").status, 400);
+  EXPECT_EQ(rig.request(core::Operation::sdo_read, 5, R"({"index": )").status, 400);
 }
 
 TEST(AppDemo, SdoWriteRoundTrip) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
-  auto w = rig.request(RequestKind::SdoWrite, 5, R"({"index": "0x6060", "subIndex": 0, "value": 3})");
+  auto w = rig.request(core::Operation::sdo_write, 5, R"({"index": "0x6060", "subIndex": 0, "value": 3})");
   ASSERT_EQ(w.status, 200) << w.body;
-  auto r = rig.request(RequestKind::SdoRead, 5, R"({"index": "0x6060", "subIndex": 0})");
+  auto r = rig.request(core::Operation::sdo_read, 5, R"({"index": "0x6060", "subIndex": 0})");
   ASSERT_EQ(r.status, 200) << r.body;
   EXPECT_EQ(boost::json::parse(r.body).as_object().at("value").to_number<int>(), 3);
 }
 
 TEST(AppDemo, TheGatewaysOwnNodeAnswersFromItsDictionary) {
   DemoRig rig;
-  auto name = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1008", "subIndex": 0})");
+  auto name = rig.request(core::Operation::sdo_read, 127, R"({"index": "0x1008", "subIndex": 0})");
   ASSERT_EQ(name.status, 200) << name.body;
   EXPECT_THAT(name.body, HasSubstr("canopen-gateway"));
-  EXPECT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
-  auto hb = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1017", "subIndex": 0})");
+  EXPECT_EQ(rig.request(core::Operation::sdo_write, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  auto hb = rig.request(core::Operation::sdo_read, 127, R"({"index": "0x1017", "subIndex": 0})");
   EXPECT_THAT(hb.body, HasSubstr("\"value\":250"));
   // The dictionary's rules hold: read-only 1018h sub 1, an object that does not exist.
-  auto ro = rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1018", "subIndex": 1, "value": 1})");
+  auto ro = rig.request(core::Operation::sdo_write, 127, R"({"index": "0x1018", "subIndex": 1, "value": 1})");
   EXPECT_EQ(ro.status, 422);
   EXPECT_THAT(ro.body, HasSubstr("0x06010002"));
-  auto missing = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x2000", "subIndex": 0})");
+  auto missing = rig.request(core::Operation::sdo_read, 127, R"({"index": "0x2000", "subIndex": 0})");
   EXPECT_EQ(missing.status, 422);
   EXPECT_THAT(missing.body, HasSubstr("0x06020000"));
 }
@@ -255,34 +257,34 @@ TEST(AppDemo, BusStateIsPublishedAtStartRetainedWithoutAChange) {
 TEST(AppDemo, ResetCommunicationOfTheOwnNodeRestoresItsHeartbeatTime) {
   DemoRig rig;
   auto hb = [&] {
-    const auto r = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x1017", "subIndex": 0})");
+    const auto r = rig.request(core::Operation::sdo_read, 127, R"({"index": "0x1017", "subIndex": 0})");
     return boost::json::parse(r.body).as_object().at("value").to_number<int>();
   };
   ASSERT_EQ(hb(), 1000) << "heartbeat-ms default";
-  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  ASSERT_EQ(rig.request(core::Operation::sdo_write, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
   ASSERT_EQ(hb(), 250);
-  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  ASSERT_EQ(rig.request(core::Operation::nmt, 127, R"({"command": "reset-comm"})").status, 200);
   EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
   // Saved with 1010h sub 2 ("save", 7.5.2.13) it survives the reset, until
   // 1011h sub 2 ("load", 7.5.2.14) and the next reset.
-  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
-  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1010", "subIndex": 2, "value": 1702257011})").status,
+  ASSERT_EQ(rig.request(core::Operation::sdo_write, 127, R"({"index": "0x1017", "subIndex": 0, "value": 250})").status, 200);
+  ASSERT_EQ(rig.request(core::Operation::sdo_write, 127, R"({"index": "0x1010", "subIndex": 2, "value": 1702257011})").status,
             200);
   // Written after the save: the reset undoes it (so it did happen).
-  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x100C", "subIndex": 0, "value": 5})").status, 200);
-  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  ASSERT_EQ(rig.request(core::Operation::sdo_write, 127, R"({"index": "0x100C", "subIndex": 0, "value": 5})").status, 200);
+  ASSERT_EQ(rig.request(core::Operation::nmt, 127, R"({"command": "reset-comm"})").status, 200);
   EXPECT_TRUE(rig.run_until([&] {
-    const auto r = rig.request(RequestKind::SdoRead, 127, R"({"index": "0x100C", "subIndex": 0})");
+    const auto r = rig.request(core::Operation::sdo_read, 127, R"({"index": "0x100C", "subIndex": 0})");
     return boost::json::parse(r.body).as_object().at("value").to_number<int>() == 0;
   }, 2s));
   EXPECT_EQ(hb(), 250);
-  ASSERT_EQ(rig.request(RequestKind::SdoWrite, 127, R"({"index": "0x1011", "subIndex": 2, "value": 1684107116})").status,
+  ASSERT_EQ(rig.request(core::Operation::sdo_write, 127, R"({"index": "0x1011", "subIndex": 2, "value": 1684107116})").status,
             200);
-  ASSERT_EQ(rig.request(RequestKind::Nmt, 127, R"({"command": "reset-comm"})").status, 200);
+  ASSERT_EQ(rig.request(core::Operation::nmt, 127, R"({"command": "reset-comm"})").status, 200);
   EXPECT_TRUE(rig.run_until([&] { return hb() == 1000; }, 2s));
 }
 
-// Issue 11, the MQTT path (requests through handle_request, as the MQTT
+// Issue 11, the MQTT path (requests through the request core, as the MQTT
 // front end sends them): the drive's TPDO2 remapped by SDO (CiA 301
 // 7.5.2.39) is published with the new mapping.
 TEST(AppDemo, TpdoRemappedBySdoRequestsIsPublishedWithTheNewMapping_7_5_2_39) {
@@ -295,7 +297,7 @@ TEST(AppDemo, TpdoRemappedBySdoRequestsIsPublishedWithTheNewMapping_7_5_2_39) {
       R"({"index": "0x1A01", "subIndex": 0, "value": 1})",
       R"({"index": "0x1801", "subIndex": 1, "value": 645})",  // 285h: enable
   };
-  for (const char* w : writes) ASSERT_EQ(rig.request(RequestKind::SdoWrite, 5, w).status, 200) << w;
+  for (const char* w : writes) ASSERT_EQ(rig.request(core::Operation::sdo_write, 5, w).status, 200) << w;
   const auto mark = rig.events.size();
   auto remapped = [&] {
     for (std::size_t i = mark; i < rig.events.size(); ++i)
@@ -317,15 +319,15 @@ TEST(AppDemo, TpdoRemappedBySdoRequestsIsPublishedWithTheNewMapping_7_5_2_39) {
 TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {
   DemoRig rig;
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 10); }));
-  EXPECT_EQ(rig.request(RequestKind::Nmt, 10, R"({"command": "stop"})").status, 200);
+  EXPECT_EQ(rig.request(core::Operation::nmt, 10, R"({"command": "stop"})").status, 200);
   EXPECT_TRUE(rig.run_until([&] {
     const auto* n = rig.app->cache().node(1, 10);
     return n->state == canopen::NmtState::Stopped;
   }));
   EXPECT_TRUE(operational(rig.app->cache(), 5)) << "only node 10 was addressed";
-  EXPECT_EQ(rig.request(RequestKind::Nmt, 0, R"({"command": "start"})").status, 200);
+  EXPECT_EQ(rig.request(core::Operation::nmt, 0, R"({"command": "start"})").status, 200);
   EXPECT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 10); }));
-  EXPECT_EQ(rig.request(RequestKind::Nmt, 10, R"({"command": "jump"})").status, 400);
+  EXPECT_EQ(rig.request(core::Operation::nmt, 10, R"({"command": "jump"})").status, 400);
 }
 
 }  // namespace

@@ -51,13 +51,7 @@ TEST(Roles, EachRouteNeedsItsRole) {
 }
 
 TEST(Roles, RequestsNeedTheirRoleAndResetsNeedAdmin) {
-  EXPECT_EQ(required_role(RequestKind::SdoRead, 0), Role::Viewer);
-  EXPECT_EQ(required_role(RequestKind::SdoWrite, 0), Role::Operator);
-  EXPECT_EQ(required_role(RequestKind::Nmt, 0x01), Role::Operator);  // start
-  EXPECT_EQ(required_role(RequestKind::Nmt, 0x02), Role::Operator);  // stop
-  EXPECT_EQ(required_role(RequestKind::Nmt, 0x80), Role::Operator);  // pre-operational
-  EXPECT_EQ(required_role(RequestKind::Nmt, 0x81), Role::Admin);     // reset node
-  EXPECT_EQ(required_role(RequestKind::Nmt, 0x82), Role::Admin);     // reset communication
+  // The roles of the request core's commands: tests/unit/core/request_test.cpp.
   EXPECT_TRUE(allows(Role::Admin, Role::Operator));
   EXPECT_FALSE(allows(Role::Viewer, Role::Operator));
   EXPECT_FALSE(allows(Role::None, Role::Viewer));
@@ -144,35 +138,35 @@ TEST(Bearer, FromHeaderOrForTheEventStreamFromTheQuery) {
 
 TEST(Identify, TokenOrAnonymousRoleForUncheckedTransports) {
   TokenStore store({{"ops", Role::Operator, kTestHash}});
-  ApiRequest req;
-  req.kind = RequestKind::SdoWrite;
+  core::Caller req;
+  req.transport = core::Transport::mqtt;
   EXPECT_FALSE(identify(req, store, Role::None));
   EXPECT_EQ(req.role, Role::None);
   ASSERT_TRUE(check_role(req, Role::Operator));
   EXPECT_EQ(check_role(req, Role::Operator)->status, 401);
 
   EXPECT_EQ(req.who, "anonymous");
-  EXPECT_EQ(req.caller, kTokenlessMqttCaller);  // one caller for every tokenless request
+  EXPECT_EQ(req.key, kTokenlessMqttCaller);  // one caller for every tokenless request
 
   req.who = "mqtt";  // the transport's part of who
   req.token = "test";
   EXPECT_FALSE(identify(req, store, Role::None));
   EXPECT_EQ(req.who, "ops@mqtt");
-  EXPECT_EQ(req.caller, "token 'ops'");  // the token's holder, wherever it comes from
+  EXPECT_EQ(req.key, "token 'ops'");  // the token's holder, wherever it comes from
   EXPECT_EQ(req.role, Role::Operator);
   EXPECT_TRUE(req.token.empty());  // not kept once checked
   EXPECT_FALSE(check_role(req, Role::Operator));
   ASSERT_TRUE(check_role(req, Role::Admin));
   EXPECT_EQ(check_role(req, Role::Admin)->status, 403);
 
-  ApiRequest bad;
+  core::Caller bad;
   bad.token = "wrong";
   auto d = identify(bad, store, Role::Admin);  // a bad token is refused even where anonymous may
   ASSERT_TRUE(d);
   EXPECT_EQ(d->status, 401);
-  EXPECT_EQ(bad.caller, kTokenlessMqttCaller);  // limited with the tokenless ones
+  EXPECT_EQ(bad.key, kTokenlessMqttCaller);  // limited with the tokenless ones
 
-  ApiRequest http;  // checked by the HTTP layer already: left alone
+  core::Caller http;  // checked by the HTTP layer already: left alone
   http.authenticated = true;
   http.role = Role::Viewer;
   http.token = "test";

@@ -15,7 +15,9 @@
 
 #include "auth.hpp"
 #include "unit/rest/rest_rig.hpp"
+#include "request_codec.hpp"
 #include "support/memory_log.hpp"
+#include "support/mqtt_request.hpp"
 
 namespace gateway {
 namespace {
@@ -209,28 +211,24 @@ TEST(SecurityMatrix, NmtResetsNeedAdminAndEveryWriteIsAudited) {
 // App checks it with the same roles.
 TEST(SecurityMatrix, RequestsWithoutHttpUseTheirTokenAndTheSameRoles) {
   SecureRig rig;
-  auto call = [&](RequestKind kind, std::string token, std::string body, std::uint8_t node = 5) {
-    ApiRequest req;
-    req.kind = kind;
-    req.network = 1;
-    req.node = node;
-    req.body = std::move(body);
-    req.token = std::move(token);
-    req.who = "mqtt";
-    std::optional<ApiReply> got;
-    rig.rig.app->handle_request(req, [&](ApiReply r) { got = std::move(r); });
+  auto call = [&](core::Operation op, std::string token, std::string body, std::uint8_t node = 5) {
+    auto d = ::test::mqtt_request(op, 1, node, body, token);
+    d.request.caller.who = "mqtt";
+    std::optional<Reply> got;
+    rig.rig.app->requests().execute(std::move(d.request),
+                                    [&, opts = d.options](core::Result r) { got = encode_result(r, opts); });
     EXPECT_TRUE(rig.run_until([&] { return got.has_value(); }));
-    return got.value_or(ApiReply{0, {}, {}});
+    return got.value_or(Reply{0, {}, {}});
   };
   const std::string read = R"({"index":"1017","subIndex":0})";
-  EXPECT_EQ(call(RequestKind::SdoRead, "", read).status, 401);  // requests-role none: a token is required
-  EXPECT_EQ(call(RequestKind::SdoRead, "wrong", read).status, 401);
-  EXPECT_EQ(call(RequestKind::SdoRead, "viewer-secret", read).status, 200);
+  EXPECT_EQ(call(core::Operation::sdo_read, "", read).status, 401);  // requests-role none: a token is required
+  EXPECT_EQ(call(core::Operation::sdo_read, "wrong", read).status, 401);
+  EXPECT_EQ(call(core::Operation::sdo_read, "viewer-secret", read).status, 200);
   const std::string write = R"({"index":"1017","subIndex":0,"value":1000})";
-  EXPECT_EQ(call(RequestKind::SdoWrite, "viewer-secret", write).status, 403);
-  EXPECT_EQ(call(RequestKind::SdoWrite, "operator-secret", write).status, 200);
-  EXPECT_EQ(call(RequestKind::Nmt, "operator-secret", R"({"command":"reset-node"})", 0).status, 403);
-  EXPECT_EQ(call(RequestKind::Nmt, "admin-secret", R"({"command":"start"})", 0).status, 200);
+  EXPECT_EQ(call(core::Operation::sdo_write, "viewer-secret", write).status, 403);
+  EXPECT_EQ(call(core::Operation::sdo_write, "operator-secret", write).status, 200);
+  EXPECT_EQ(call(core::Operation::nmt, "operator-secret", R"({"command":"reset-node"})", 0).status, 403);
+  EXPECT_EQ(call(core::Operation::nmt, "admin-secret", R"({"command":"start"})", 0).status, 200);
   const auto log = rig.log_text();
   EXPECT_THAT(log, HasSubstr("audit: auth failure: mqtt: request to net 1 node 5: 401 the token is not valid"));
   EXPECT_THAT(log, HasSubstr("audit: auth failure: viewer@mqtt: SDO write net 1 node 5: 403"));

@@ -72,7 +72,7 @@ TEST(ParseSdoRead, JsonErrors) {
     auto r = parse_sdo_read(body, false);
     ASSERT_FALSE(r.ok()) << body;
     EXPECT_NE(r.error().detail.find(expect), std::string::npos) << body << " -> " << r.error().detail;
-    const ApiReply reply = bad_request(r.error());
+    const Reply reply = bad_request(r.error());
     EXPECT_EQ(reply.status, 400);
     EXPECT_EQ(reply.content_type, "application/problem+json");
     EXPECT_EQ(json::parse(reply.body).at("detail"), json::value(r.error().detail));

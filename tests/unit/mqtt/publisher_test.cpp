@@ -1,4 +1,5 @@
-// MqttPublisher against a real mosquitto started by the fixture.
+// MqttPublisher against a real mosquitto started by the fixture; requests
+// through the MqttRequests unit it hands them to (a fake request core).
 #include "mqtt/publisher.hpp"
 #include "support/memory_log.hpp"
 
@@ -59,15 +60,18 @@ class MqttPublisherTest : public ::testing::Test {
   // `log` (default: the fixture's, warnings to stderr) MUST outlive the publisher.
   void start_publisher(MqttConfig c, gateway::Logger* log = nullptr) {
     io_.call([&] {
+      // The request core's stand-in: records the request, answers value 42.
+      requests_unit_ = std::make_unique<gateway::mqtt::MqttRequests>(
+          c.gateway_id, c.reply_topics, log != nullptr ? *log : log_,
+          [this](gateway::core::Request r, gateway::mqtt::MqttRequests::Done done) {
+            requests_.push_back(std::move(r));
+            ++request_count_;
+            done(gateway::core::SdoValue{canopen::Value::of_unsigned(canopen::DataType::Unsigned8, 42)});
+          });
+      auto* unit = requests_unit_.get();
       pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log != nullptr ? *log : log_,
-                                             [this](const gateway::ApiRequest& r, gateway::ReplyFn reply) {
-        requests_.push_back(r);
-        ++request_count_;
-        boost::json::object o;
-        o["value"] = 42;
-        o["echo"] = r.body;
-        reply(gateway::ApiReply{200, boost::json::serialize(o), "application/json"});
-      });
+                                             [unit](const gateway::mqtt::codec::Publish& m) { unit->on_publish(m); });
+      requests_unit_->set_reply_sender(pub_->reply_sender());
       pub_->start();
     });
     ASSERT_TRUE(eventually([&] { return counters().connected; })) << broker_->log();
@@ -76,13 +80,19 @@ class MqttPublisherTest : public ::testing::Test {
   MqttPublisher::Counters counters() {
     return io_.call([&] { return pub_->counters(); });
   }
+  gateway::mqtt::MqttRequests::Counters request_counters() {
+    return io_.call([&] { return requests_unit_->counters(); });
+  }
 
   void publish(EncodedEventPtr e) {
     io_.call([&] { pub_->publish(e); });
   }
 
   void TearDown() override {
-    if (pub_) io_.call([&] { pub_.reset(); });
+    if (pub_) io_.call([&] {
+      pub_.reset();
+      requests_unit_.reset();
+    });
   }
 
   TempDir queue_dir_;
@@ -91,8 +101,9 @@ class MqttPublisherTest : public ::testing::Test {
   MemoryLog captured_;  // for tests that read the log: start_publisher(c, &captured_log_)
   gateway::Logger captured_log_{gateway::LogLevel::Warn, captured_.file};
   IoThread io_;
+  std::unique_ptr<gateway::mqtt::MqttRequests> requests_unit_;  // before pub_: replies go through it
   std::unique_ptr<MqttPublisher> pub_;
-  std::vector<gateway::ApiRequest> requests_;  // io thread
+  std::vector<gateway::core::Request> requests_;  // io thread
   std::atomic<int> request_count_{0};
 };
 
@@ -223,10 +234,14 @@ TEST_F(MqttPublisherTest, RequestOverMqtt5WithResponseTopicAndCorrelationData) {
 
   auto reqs = io_.call([&] { return requests_; });
   ASSERT_EQ(reqs.size(), 1u);
-  EXPECT_EQ(reqs[0].kind, gateway::RequestKind::SdoRead);
+  const auto* read = std::get_if<gateway::core::SdoRead>(&reqs[0].command);
+  ASSERT_NE(read, nullptr);
   EXPECT_EQ(reqs[0].network, 2u);
-  EXPECT_EQ(reqs[0].node, 5);
-  EXPECT_EQ(reqs[0].body, R"({"index":"1017","subIndex":0})");
+  EXPECT_EQ(read->node, 5);
+  // {"index":"1017","subIndex":0}, decoded
+  EXPECT_EQ(read->index, 0x1017);
+  EXPECT_EQ(read->sub, 0);
+  EXPECT_FALSE(read->type);
 }
 
 TEST_F(MqttPublisherTest, RequestOverMqtt311WithReplyToInBody) {
@@ -252,11 +267,16 @@ TEST_F(MqttPublisherTest, RequestOverMqtt311WithReplyToInBody) {
 
   auto reqs = io_.call([&] { return requests_; });
   ASSERT_EQ(reqs.size(), 2u);
-  EXPECT_EQ(reqs[0].kind, gateway::RequestKind::Nmt);
-  EXPECT_EQ(reqs[0].node, 0);
-  EXPECT_EQ(reqs[0].body, R"({"command":"start"})");  // reply fields removed
-  EXPECT_EQ(reqs[1].kind, gateway::RequestKind::SdoWrite);
-  EXPECT_EQ(reqs[1].node, 9);
+  const auto* nmt = std::get_if<gateway::core::Nmt>(&reqs[0].command);
+  ASSERT_NE(nmt, nullptr) << "reply fields removed, the rest decoded";
+  EXPECT_EQ(nmt->node, 0);
+  EXPECT_EQ(nmt->command, canopen::NmtCommand::Start);  // {"command":"start"}
+  // An SDO write to node 9; without an index its body does not decode, so
+  // the core gets it as undecodable (and answers 400 once it has checked the caller).
+  const auto* write = std::get_if<gateway::core::Undecodable>(&reqs[1].command);
+  ASSERT_NE(write, nullptr);
+  EXPECT_EQ(write->operation, gateway::core::Operation::sdo_write);
+  EXPECT_EQ(write->node, 9);
 }
 
 // The request's token reaches the handler (which checks it, see
@@ -283,10 +303,12 @@ TEST_F(MqttPublisherTest, RequestTokenFromUserPropertyOrBody) {
 
   auto reqs = io_.call([&] { return requests_; });
   ASSERT_EQ(reqs.size(), 2u);
-  EXPECT_EQ(reqs[0].token, "s3cret");
-  EXPECT_FALSE(reqs[0].authenticated);  // the handler must check it
-  EXPECT_EQ(reqs[1].token, "other");
-  EXPECT_EQ(reqs[1].body, R"({"command":"stop"})");
+  EXPECT_EQ(reqs[0].caller.token, "s3cret");
+  EXPECT_FALSE(reqs[0].caller.authenticated);  // the core must check it
+  EXPECT_EQ(reqs[1].caller.token, "other");
+  const auto* stop = std::get_if<gateway::core::Nmt>(&reqs[1].command);
+  ASSERT_NE(stop, nullptr) << "the token left the body: {\"command\":\"stop\"} decodes";
+  EXPECT_EQ(stop->command, canopen::NmtCommand::Stop);
 }
 
 TEST_F(MqttPublisherTest, BadRequestsAreAnsweredOrLoggedNeverCrash) {
@@ -318,8 +340,8 @@ TEST_F(MqttPublisherTest, BadRequestsAreAnsweredOrLoggedNeverCrash) {
   ASSERT_TRUE(client.wait_count(4, 10s));
   EXPECT_EQ(boost::json::parse(client.messages().at(3)->get_payload_str()).as_object().at("correlationId").as_string(),
             "ok");
-  EXPECT_GE(counters().bad_requests, 5u);
-  EXPECT_EQ(counters().replies_refused, 2u);
+  EXPECT_GE(request_counters().bad_requests, 5u);
+  EXPECT_EQ(request_counters().replies_refused, 2u);
 }
 
 std::size_t count_of(const std::string& text, const std::string& what) {
@@ -372,7 +394,7 @@ TEST_F(MqttPublisherTest, RepliesGoOnlyToAllowedTopicsWithSmallCorrelationData) 
   EXPECT_EQ(::mqtt::get<std::string>(got[1]->get_properties(), ::mqtt::property::CORRELATION_DATA),
             std::string(1024, 'y'));
   EXPECT_EQ(request_count_, 1) << "a request whose reply is refused is not executed";
-  const auto c = counters();
+  const auto c = request_counters();
   EXPECT_EQ(c.replies_refused, static_cast<std::uint64_t>(refused));
   EXPECT_EQ(c.bad_requests, static_cast<std::uint64_t>(refused));
   EXPECT_EQ(c.replies, 1u);
@@ -402,7 +424,7 @@ TEST_F(MqttPublisherTest, ConfiguredReplyTopicsReplaceTheDefault) {
   ASSERT_TRUE(client.wait_count(1, 10s));
   EXPECT_EQ(client.messages().at(0)->get_topic(), "plant/7/answers");
   EXPECT_EQ(request_count_, 1);
-  EXPECT_EQ(counters().replies_refused, 1u);
+  EXPECT_EQ(request_counters().replies_refused, 1u);
 }
 
 // Messages published while the broker is down are held by the publisher's

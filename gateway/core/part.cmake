@@ -1,0 +1,14 @@
+# The typed request core (core/request.hpp, core/request_core.hpp): every
+# front end (REST, MQTT, ...) decodes into a core::Request and encodes the
+# core::Result; range checks, roles, limits, audit and request metrics
+# happen here once. core/format.hpp: the one way to write object addresses
+# and hex.
+# gateway_core_types: the vocabulary and formatting, no state; the codecs
+# (messages), auth and the transports use it without the core itself.
+add_library(gateway_core_types STATIC ${CMAKE_CURRENT_LIST_DIR}/request.cpp ${CMAKE_CURRENT_LIST_DIR}/format.cpp)
+target_include_directories(gateway_core_types PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
+target_link_libraries(gateway_core_types PUBLIC gateway_lib canopen_pdo canopen_od Boost::json PRIVATE canopen_options)
+
+add_library(gateway_core STATIC ${CMAKE_CURRENT_LIST_DIR}/request_core.cpp)
+target_link_libraries(gateway_core PUBLIC gateway_core_types gateway_auth canopen_network canopen_eds
+                                   PRIVATE gateway_rest_parse canopen_json canopen_options)

@@ -1,0 +1,192 @@
+// The typed request core's vocabulary: who asks (Caller), what they ask for
+// (one Command), and the one answer (Result: a typed success or a Problem).
+// Every front end (REST, MQTT, later CiA 309-3 ASCII, Sparkplug B, LSS,
+// runtime configuration) decodes its wire format into a Request once,
+// hands it to RequestCore::execute (request_core.hpp) and encodes the
+// Result itself. A new operation is a new Command alternative with its
+// Result alternative; a new front end is a decoder and an encoder.
+//
+// Plain value types; thread safety as for any value.
+#pragma once
+
+#include <boost/json/value.hpp>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <variant>
+
+#include "canopen/events.hpp"
+#include "canopen/pdo/config_reader.hpp"
+#include "canopen/types.hpp"
+#include "role.hpp"
+
+namespace gateway::core {
+
+enum class Transport : std::uint8_t { rest, mqtt, websocket, ascii, sparkplug };
+
+// Who asks. A transport that checked the caller itself (HTTP's authorizer)
+// sets `authenticated`, `role`, `who` and `key`; otherwise (MQTT) it passes
+// the bearer `token` that came with the request ("" = none) and the core
+// identifies the caller from it (auth::TokenStore) and rate-limits it.
+struct Caller {
+  Transport transport = Transport::rest;
+  std::string who;             // identity for the audit log ("" = anonymous)
+  bool authenticated = false;  // role, who and key are set by the transport
+  Role role = Role::None;
+  // Who counts as one caller for per-caller limits (a share of each node's
+  // SDO queue, the request rate limit): auth::token_caller,
+  // auth::address_caller or auth::kTokenlessMqttCaller.
+  std::string key;
+  std::string token;  // not authenticated: the bearer token to check
+};
+
+// The operations, for roles and for requests that could not be decoded.
+enum class Operation : std::uint8_t { sdo_read, sdo_write, nmt, rpdo_write, sync, pdo_config_read };
+
+// SDO upload of index/sub from `node` (the gateway's own node-ID: its own
+// dictionary answers). type: as asked, else the node's EDS/DCF entry's, else
+// DOMAIN (raw bytes).
+struct SdoRead {
+  std::uint8_t node = 0;
+  std::uint16_t index = 0;
+  std::uint8_t sub = 0;
+  std::optional<canopen::DataType> type;
+};
+
+// SDO download. The value as sent (JSON, or a protobuf Value as JSON), typed
+// by the core as `type` or the EDS/DCF entry's type and checked against its
+// limits before anything goes on the bus.
+struct SdoWrite {
+  std::uint8_t node = 0;
+  std::uint16_t index = 0;
+  std::uint8_t sub = 0;
+  std::optional<canopen::DataType> type;
+  boost::json::value value;
+};
+
+// NMT command to `node` (0 = all nodes).
+struct Nmt {
+  std::uint8_t node = 0;
+  canopen::NmtCommand command = canopen::NmtCommand::Start;
+};
+
+// Process data to `node`'s RPDO `number`. The body as sent
+// ({"values": [{index, subIndex, value}]} or {"raw": "hex"}), typed by the
+// core against the RPDO's mapping in effect (rest_parse.hpp).
+struct RpdoWrite {
+  std::uint8_t node = 0;
+  std::uint16_t number = 0;
+  std::string body;
+};
+
+// One SYNC on the network, with the counter when given (1..240).
+struct Sync {
+  std::optional<std::uint8_t> counter;
+};
+
+// Read `node`'s PDO configuration from the device by SDO.
+struct PdoConfigRead {
+  std::uint8_t node = 0;
+};
+
+// A request whose wire form the transport could not decode, though the
+// path or topic said which operation it was for. It is answered 400 with
+// `detail`, but only after the caller was identified, rate-limited, the
+// address checked and (for SDO) the role checked, as a well-formed request
+// would be: bad input gets no cheaper way past those. `in_address`: the
+// fault is in the path (node, index, ...), answered before the bus state is.
+struct Undecodable {
+  Operation operation = Operation::sdo_read;
+  std::uint8_t node = 0;
+  std::string detail;
+  bool in_address = false;
+};
+
+using Command = std::variant<SdoRead, SdoWrite, Nmt, RpdoWrite, Sync, PdoConfigRead, Undecodable>;
+
+struct Request {
+  Caller caller;
+  std::uint32_t network = 0;  // 1-based
+  Command command;
+  // Refuse with 503 while the network's bus is bus-off or down (REST does;
+  // MQTT requests wait in the SDO queue instead).
+  bool check_bus = false;
+};
+
+// ---- results -----------------------------------------------------------------
+
+// SDO read: the value read; SDO write: the value written.
+struct SdoValue {
+  canopen::Value value;
+};
+
+struct NmtSent {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  canopen::NmtCommand command = canopen::NmtCommand::Start;
+};
+
+struct RpdoSent {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  std::uint16_t number = 0;
+  std::uint32_t cob_id = 0;
+  std::uint8_t transmission_type = 0;
+  canopen::Bytes raw;  // the PDO's payload after the write
+};
+
+struct SyncSent {
+  std::uint32_t network = 0;
+  std::optional<std::uint8_t> counter;
+};
+
+struct PdoConfigReport {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  canopen::pdo::PdoReadReport report;
+};
+
+// A refusal or failure (RFC 9457 problem details, HTTP status semantics).
+struct Problem {
+  int status = 500;
+  std::string detail;
+  std::string title;  // "" = the status' reason phrase
+  std::string type;   // "" = about:blank
+  std::optional<std::uint32_t> abort_code;  // SDO abort code (422/502/504 of a transfer)
+  int retry_after = 0;  // seconds, with 429/503 (HTTP Retry-After); 0 = not said
+  // Whether the core had read the command when it refused: only then does
+  // a reply echo the correlation id that came inside the command's body.
+  bool command_read = true;
+};
+
+using Result = std::variant<SdoValue, NmtSent, RpdoSent, SyncSent, PdoConfigReport, Problem>;
+
+// A failed SDO transfer or dictionary access as a Problem: remote (the
+// device, or the own dictionary, refused) 422 "SDO abort"; a local timeout
+// (05040000h) 504; other local failures 502. All carry the abort code, and
+// the CiA 301 text as detail (": " and `context` appended when given).
+Problem sdo_problem(std::error_code ec, bool remote, std::string_view context = {});
+
+// The problem+json document of `p` (RFC 9457): type ("about:blank" unless
+// given), title (the status' reason phrase unless given), status, detail,
+// abortCode ("0x06020000") when set, correlationId when not empty; text
+// that is not UTF-8 is read as Latin-1. The one JSON problem builder: REST,
+// MQTT and the HTTP server's own errors (http::Response::problem) use it;
+// the protobuf Problem (request_codec.hpp) has the same fields.
+std::string problem_json(const Problem& p, std::string_view correlation_id = {});
+
+// The role a command needs: SDO read viewer; SDO write, RPDO write, SYNC,
+// PDO configuration read and NMT start/stop/pre-operational operator; NMT
+// reset node / reset communication admin.
+Role required_role(const Command& command);
+Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt = std::nullopt);
+
+std::string_view to_string(Transport t);
+
+// "start" "stop" "preop" "reset-node" "reset-comm" (the API's names).
+std::string_view nmt_command_name(canopen::NmtCommand c);
+std::optional<canopen::NmtCommand> nmt_command_from_name(std::string_view s);
+
+}  // namespace gateway::core

@@ -1,0 +1,176 @@
+// The request core: executes one typed Request (request.hpp) from any
+// front end and answers with exactly one Result. Everything every front end
+// needs happens here, once:
+//   - a caller the transport did not check (MQTT) is identified from its
+//     token (auth::identify; without one: Settings::anonymous_role) and
+//     rate-limited per caller (429 + Retry-After), before anything is
+//     logged or done, so a flood of bad tokens is limited too;
+//   - the address: the network must exist (404), the node be 1..127 (0 for
+//     NMT only; 400), the bus up when the request asks (503);
+//   - the role the command needs (required_role; 401/403, with an audit line);
+//   - a caller may hold at most auth::caller_share(queue limit) places of a
+//     node's SDO queue (429 + Retry-After beyond that), so one caller cannot
+//     lock the others out of a node;
+//   - SDO semantics: the type (as asked, else the EDS/DCF's, else DOMAIN),
+//     values typed and checked against the EDS/DCF limits before anything
+//     goes on the bus, the gateway's own node answered from its dictionary;
+//   - audit lines for every write, NMT command, SYNC and PDO read, and for
+//     every refusal by role;
+//   - counters and the SDO latency histogram (/metrics).
+// The core reaches the CAN side only through Networks, which the process
+// (App) implements over its networks and tests fake.
+//
+// Thread safety: one io thread. execute() and every Networks call run on
+// it; `done` is called exactly once on it, at once for a refusal or later
+// (an SDO transfer takes time), never from inside another thread.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <system_error>
+
+#include "auth.hpp"
+#include "canopen/can/bus_state.hpp"
+#include "canopen/result.hpp"
+#include "canopen/sdo/client.hpp"
+#include "core/request.hpp"
+
+namespace canopen::eds {
+struct DeviceDescription;
+}
+
+namespace canopen::od {
+class ObjectDictionary;
+}
+
+namespace canopen::pdo {
+struct PdoConfig;
+}
+
+namespace gateway::core {
+
+// The CAN side as the core needs it. Networks are numbered 1..count(). The
+// core calls only with a network in that range. Implementations let the
+// services follow what they are asked (new timer deadlines) themselves.
+class Networks {
+ public:
+  virtual ~Networks() = default;
+  virtual std::uint32_t count() const = 0;
+  // The gateway's own node-ID on `net`: SDO requests to it are answered by
+  // its own dictionary (its socket does not hear its own requests).
+  virtual std::uint8_t own_node_id(std::uint32_t net) const = 0;
+  virtual const canopen::od::ObjectDictionary& own_dictionary(std::uint32_t net) const = 0;
+  // A write to the own dictionary as an SDO download would do it (access,
+  // length and limit checks, hooks and observers).
+  virtual std::error_code write_own(std::uint32_t net, std::uint16_t index, std::uint8_t sub,
+                                    std::span<const std::uint8_t> data) = 0;
+  // The node's EDS/DCF; nullptr when none is configured.
+  virtual const canopen::eds::DeviceDescription* description(std::uint32_t net, std::uint8_t node) const = 0;
+  virtual std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const = 0;
+  // SDO transfers (canopen::sdo::SdoClient::upload/download); an error when
+  // the node's queue is full (request.on_done then never runs).
+  virtual canopen::Result<canopen::sdo::RequestId> sdo_upload(std::uint32_t net, canopen::sdo::Request request) = 0;
+  virtual canopen::Result<canopen::sdo::RequestId> sdo_download(std::uint32_t net, canopen::sdo::Request request,
+                                                                canopen::Bytes data) = 0;
+  virtual void send_nmt(std::uint32_t net, canopen::NmtCommand command, std::uint8_t node) = 0;
+  // The configuration `node`'s RPDO `number` is produced with now; nullptr
+  // when it is not produced. Valid until the next event on the io thread.
+  virtual const canopen::pdo::PdoConfig* rpdo_config(std::uint32_t net, std::uint8_t node,
+                                                     std::uint16_t number) const = 0;
+  // Errors as PdoTransmitter::set_values/set_raw. On success `sent` gets the
+  // PDO's payload after the write.
+  virtual std::error_code write_rpdo(std::uint32_t net, std::uint8_t node, std::uint16_t number,
+                                     std::span<const canopen::MappedValue> values, const canopen::Bytes* raw,
+                                     canopen::Bytes& sent) = 0;
+  // One SYNC on the bus, also delivered to the gateway's own services.
+  virtual void send_sync(std::uint32_t net, std::optional<std::uint8_t> counter) = 0;
+  // Whether the node's PDOs are decoded (it has an EDS/DCF).
+  virtual bool has_pdo_table(std::uint32_t net, std::uint8_t node) const = 0;
+  // canopen::Network::read_pdo_config; `done` runs once, later, unless an
+  // error is returned.
+  virtual std::error_code read_pdo_config(std::uint32_t net, std::uint8_t node,
+                                          std::function<void(const canopen::pdo::PdoReadReport&)> done) = 0;
+  // The time for the rate limit and the SDO latency histogram.
+  virtual std::chrono::steady_clock::time_point now() const { return std::chrono::steady_clock::now(); }
+};
+
+struct Counters {
+  std::uint64_t sdo_requests = 0;
+  std::uint64_t sdo_aborts = 0;
+  std::uint64_t sdo_timeouts = 0;
+  std::uint64_t nmt_commands = 0;
+  std::uint64_t auth_failures = 0;          // requests refused with 401/403 here (MQTT, NMT resets)
+  std::uint64_t sdo_share_refused = 0;      // 429: the caller held its share of the node's SDO queue
+  std::uint64_t requests_rate_limited = 0;  // 429: an unchecked (MQTT) caller over the rate limit
+  // SDO transfers on the bus, submit to result (queueing included), as a
+  // Prometheus histogram: count per upper bound (seconds; not cumulative),
+  // the last slot for slower ones.
+  static constexpr std::array<double, 12> kSdoLatencyBounds = {0.0005, 0.001, 0.0025, 0.005, 0.01, 0.025,
+                                                               0.05,   0.1,   0.25,   0.5,   1.0,  2.5};
+  std::array<std::uint64_t, kSdoLatencyBounds.size() + 1> sdo_latency_counts{};
+  double sdo_latency_sum = 0;  // seconds
+  std::uint64_t sdo_latency_count = 0;
+};
+
+class RequestCore {
+ public:
+  struct Settings {
+    Role anonymous_role = Role::None;  // unchecked callers without a token (mqtt.requests-role)
+    double rate_limit = 0;             // unchecked callers: requests per second (0 = off)
+    double rate_burst = 1;
+    // Requests that may wait per node behind the running one (the SDO
+    // client's ClientConfig::queue_limit).
+    std::size_t sdo_queue_limit = canopen::sdo::ClientConfig{}.queue_limit;
+  };
+  using Done = std::function<void(Result)>;
+  // Writes one audit line (the caller time-stamps and flushes it).
+  using AuditSink = std::function<void(const std::string& line)>;
+
+  // `networks` and `tokens` MUST outlive the core (and the SDO transfers it
+  // started).
+  RequestCore(Networks& networks, const auth::TokenStore& tokens, Settings settings, AuditSink audit);
+
+  void execute(Request request, Done done);
+
+  const Counters& counters() const { return counters_; }
+  // The per-caller share of each node's SDO queue.
+  std::size_t sdo_share() const { return shares_.share(); }
+
+ private:
+  struct Context;
+  void sdo_read(Context& c, const SdoRead& cmd);
+  void sdo_write(Context& c, const SdoWrite& cmd);
+  void nmt(Context& c, const Nmt& cmd);
+  void rpdo_write(Context& c, const RpdoWrite& cmd);
+  void sync(Context& c, const Sync& cmd);
+  void pdo_config_read(Context& c, const PdoConfigRead& cmd);
+  // 401/403 (counted, audited) when the caller may not do what needs `need`.
+  std::optional<Problem> refused(const Context& c, Role need, std::string_view what, std::uint8_t node,
+                                 bool command_read);
+  std::optional<Problem> bus_refused(const Context& c) const;
+  // Takes a place of the node's SDO queue for the caller: the 429 when it
+  // holds its share. Every place taken MUST be given back once the request
+  // leaves the queue (place_freed), or when the queue refuses it.
+  std::optional<Problem> take_sdo_place(const Context& c, std::uint8_t node);
+  void place_freed(std::uint32_t net, std::uint8_t node, const std::string& key);
+  // After submitting an SDO transfer: the 429 when the node's queue was full.
+  std::optional<Problem> submitted(const Context& c, const canopen::Result<canopen::sdo::RequestId>& id,
+                                   std::uint8_t node);
+  void sdo_finished(std::chrono::steady_clock::time_point submitted_at);
+  Problem transfer_failed(const canopen::sdo::TransferResult& res);
+
+  Networks& net_;
+  const auth::TokenStore& tokens_;
+  Settings settings_;
+  AuditSink audit_;
+  auth::RateLimiter limiter_;
+  auth::QueueShares shares_;
+  Counters counters_;
+};
+
+}  // namespace gateway::core

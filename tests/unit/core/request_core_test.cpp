@@ -1,0 +1,411 @@
+// RequestCore against a fake core::Networks: no App, no bus, no clock. Each
+// rule the core applies once for every front end: identity and rate limit
+// for unchecked callers, the address (network, node, bus), the role per
+// command with its audit line, the per-caller share of a node's SDO queue,
+// SDO typing and limits, audit lines, counters and the latency histogram.
+#include "core/request_core.hpp"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <deque>
+#include <map>
+
+#include "canopen/eds/eds.hpp"
+#include "canopen/od/gateway_dictionary.hpp"
+#include "canopen/pdo/mapping.hpp"
+#include "canopen/sdo/abort.hpp"
+
+namespace gateway::core {
+namespace {
+
+using namespace std::chrono_literals;
+using ::testing::HasSubstr;
+
+constexpr std::uint8_t kOwnNode = 127;
+constexpr std::uint8_t kDescribed = 5;  // has the EDS below
+
+// 1000h, and 6060h (INTEGER8, limits -1..10).
+const char* kEds =
+    "[FileInfo]\nFileName=t.eds\n[DeviceInfo]\nVendorName=Test\n"
+    "[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n"
+    "[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0\n"
+    "[OptionalObjects]\nSupportedObjects=1\n1=0x6060\n"
+    "[6060]\nParameterName=Modes of operation\nObjectType=0x7\nDataType=0x0002\nAccessType=rw\n"
+    "LowLimit=-1\nHighLimit=10\nDefaultValue=0\n";
+
+struct FakeNetworks final : Networks {
+  FakeNetworks()
+      : own(canopen::od::make_gateway_dictionary(kOwnNode, canopen::od::GatewayIdentity{}, {})),
+        desc(canopen::eds::parse_device_description(kEds, "t.eds", kDescribed)) {}
+
+  std::uint32_t count() const override { return networks; }
+  std::uint8_t own_node_id(std::uint32_t) const override { return kOwnNode; }
+  const canopen::od::ObjectDictionary& own_dictionary(std::uint32_t) const override { return own; }
+  std::error_code write_own(std::uint32_t, std::uint16_t index, std::uint8_t sub,
+                            std::span<const std::uint8_t> data) override {
+    return own.write(index, sub, data);
+  }
+  const canopen::eds::DeviceDescription* description(std::uint32_t, std::uint8_t node) const override {
+    return node == kDescribed ? &desc : nullptr;
+  }
+  std::optional<canopen::can::BusState> bus_state(std::uint32_t) const override { return bus; }
+  canopen::Result<canopen::sdo::RequestId> sdo_upload(std::uint32_t, canopen::sdo::Request r) override {
+    if (queue_full) return canopen::Error{make_error_code(canopen::SdoAbort::NoSdoConnection), "queue full"};
+    pending.push_back(std::move(r));
+    return canopen::sdo::RequestId{pending.size()};
+  }
+  canopen::Result<canopen::sdo::RequestId> sdo_download(std::uint32_t, canopen::sdo::Request r,
+                                                        canopen::Bytes data) override {
+    downloaded.push_back(data);
+    return sdo_upload(1, std::move(r));
+  }
+  void send_nmt(std::uint32_t net, canopen::NmtCommand c, std::uint8_t node) override {
+    nmt.push_back({net, c, node});
+  }
+  const canopen::pdo::PdoConfig* rpdo_config(std::uint32_t, std::uint8_t, std::uint16_t) const override {
+    return nullptr;
+  }
+  std::error_code write_rpdo(std::uint32_t, std::uint8_t, std::uint16_t, std::span<const canopen::MappedValue>,
+                             const canopen::Bytes*, canopen::Bytes&) override {
+    return {};
+  }
+  void send_sync(std::uint32_t, std::optional<std::uint8_t> counter) override { syncs.push_back(counter); }
+  bool has_pdo_table(std::uint32_t, std::uint8_t node) const override { return node == kDescribed; }
+  std::error_code read_pdo_config(std::uint32_t, std::uint8_t,
+                                  std::function<void(const canopen::pdo::PdoReadReport&)>) override {
+    return {};
+  }
+  std::chrono::steady_clock::time_point now() const override { return t; }
+
+  // Answers the oldest pending transfer.
+  void answer(canopen::Bytes data = {}, std::error_code error = {}) {
+    auto r = std::move(pending.front());
+    pending.pop_front();
+    canopen::sdo::TransferResult res;
+    res.error = error;
+    res.origin = error ? canopen::sdo::Origin::Remote : canopen::sdo::Origin::None;
+    res.data = std::move(data);
+    r.on_done(std::move(res));
+  }
+
+  std::uint32_t networks = 2;
+  canopen::od::ObjectDictionary own;
+  canopen::eds::DeviceDescription desc;
+  std::optional<canopen::can::BusState> bus = canopen::can::BusState::ErrorActive;
+  bool queue_full = false;
+  std::deque<canopen::sdo::Request> pending;
+  std::vector<canopen::Bytes> downloaded;
+  struct NmtSentFrame {
+    std::uint32_t net;
+    canopen::NmtCommand command;
+    std::uint8_t node;
+  };
+  std::vector<NmtSentFrame> nmt;
+  std::vector<std::optional<std::uint8_t>> syncs;
+  std::chrono::steady_clock::time_point t{};
+};
+
+struct Rig {
+  explicit Rig(RequestCore::Settings s = {}, std::vector<auth::TokenEntry> t = {})
+      : tokens(std::move(t)), core(nets, tokens, s, [this](const std::string& l) { audit.push_back(l); }) {}
+
+  // Executes and returns where the result will be.
+  std::shared_ptr<std::optional<Result>> run(Request r) {
+    auto out = std::make_shared<std::optional<Result>>();
+    core.execute(std::move(r), [out](Result res) {
+      EXPECT_FALSE(out->has_value()) << "answered twice";
+      *out = std::move(res);
+    });
+    return out;
+  }
+  bool audited(std::string_view part) const {
+    for (const auto& l : audit)
+      if (l.find(part) != std::string::npos) return true;
+    return false;
+  }
+
+  FakeNetworks nets;
+  auth::TokenStore tokens;
+  std::vector<std::string> audit;
+  RequestCore core;
+};
+
+Caller checked(Role role, std::string key = "address 10.0.0.7", std::string who = "op@10.0.0.7") {
+  Caller c;
+  c.authenticated = true;
+  c.role = role;
+  c.key = std::move(key);
+  c.who = std::move(who);
+  return c;
+}
+
+Request request(Command cmd, Caller caller = checked(Role::Admin), std::uint32_t net = 1) {
+  Request r;
+  r.caller = std::move(caller);
+  r.network = net;
+  r.command = std::move(cmd);
+  return r;
+}
+
+const Problem& problem_of(const std::shared_ptr<std::optional<Result>>& r) {
+  static const Problem none{0, "no problem", {}, {}, {}, 0, true};
+  if (!r->has_value() || !std::holds_alternative<Problem>(**r)) {
+    ADD_FAILURE() << "not a problem";
+    return none;
+  }
+  return std::get<Problem>(**r);
+}
+
+TEST(RequestCoreAddress, UnknownNetworkIs404AndOutOfRangeNodes400) {
+  Rig rig;
+  const auto unknown = rig.run(request(SdoRead{5, 0x1000, 0, {}}, checked(Role::Admin), 3));
+  EXPECT_EQ(problem_of(unknown).status, 404);
+  EXPECT_EQ(problem_of(unknown).detail, "network 3 is not configured (networks are 1..2)");
+  EXPECT_EQ(problem_of(rig.run(request(SdoRead{5, 0x1000, 0, {}}, checked(Role::Admin), 0))).status, 404);
+  const auto zero = rig.run(request(SdoRead{0, 0x1000, 0, {}}));
+  EXPECT_EQ(problem_of(zero).status, 400);
+  EXPECT_EQ(problem_of(zero).detail, "node-ID 0 is out of range 1..127");
+  EXPECT_EQ(problem_of(rig.run(request(SdoWrite{128, 0x1000, 0, {}, 1}))).status, 400);
+  // NMT to node 0 is all nodes.
+  const auto all = rig.run(request(Nmt{0, canopen::NmtCommand::Start}));
+  ASSERT_TRUE(std::holds_alternative<NmtSent>(**all));
+  ASSERT_EQ(rig.nets.nmt.size(), 1u);
+  EXPECT_EQ(rig.nets.nmt[0].node, 0);
+  EXPECT_TRUE(rig.nets.pending.empty()) << "nothing reached the bus for the refused ones";
+}
+
+TEST(RequestCoreAddress, BusOffOrDownIs503OnlyWhenAsked) {
+  Rig rig;
+  rig.nets.bus = canopen::can::BusState::BusOff;
+  auto r = request(SdoRead{5, 0x1000, 0, canopen::DataType::Unsigned32});
+  r.check_bus = true;
+  const auto refused = rig.run(r);
+  EXPECT_EQ(problem_of(refused).status, 503);
+  EXPECT_EQ(problem_of(refused).detail, "network 1 is bus-off");
+  r.check_bus = false;  // MQTT: the request waits in the node's queue
+  EXPECT_FALSE(rig.run(r)->has_value());
+  EXPECT_EQ(rig.nets.pending.size(), 1u);
+}
+
+TEST(RequestCoreAddress, AnAddressErrorIsAnsweredAfterTheNetworkCheck) {
+  Rig rig;
+  auto r = request(Undecodable{Operation::sdo_read, 5, "sub-index must be 0..255", true}, checked(Role::Admin), 9);
+  EXPECT_EQ(problem_of(rig.run(r)).status, 404) << "the unknown network first";
+  r.network = 1;
+  rig.nets.bus = canopen::can::BusState::Down;
+  r.check_bus = true;
+  const auto bad = rig.run(r);
+  EXPECT_EQ(problem_of(bad).status, 400) << "the path before the bus";
+  EXPECT_EQ(problem_of(bad).detail, "sub-index must be 0..255");
+}
+
+TEST(RequestCoreRoles, EachCommandNeedsItsRoleAndRefusalsAreAudited) {
+  Rig rig;
+  const auto write = rig.run(request(SdoWrite{5, 0x6060, 0, {}, 3}, checked(Role::Viewer)));
+  EXPECT_EQ(problem_of(write).status, 403);
+  EXPECT_FALSE(problem_of(write).command_read);
+  EXPECT_TRUE(rig.audited("auth failure: op@10.0.0.7: SDO write net 1 node 5: 403"));
+  EXPECT_EQ(problem_of(rig.run(request(Nmt{5, canopen::NmtCommand::ResetNode}, checked(Role::Operator)))).status, 403);
+  EXPECT_TRUE(rig.audited("auth failure: op@10.0.0.7: NMT reset-node net 1 node 5: 403"));
+  EXPECT_EQ(problem_of(rig.run(request(Sync{}, checked(Role::Viewer)))).status, 403);
+  EXPECT_EQ(problem_of(rig.run(request(SdoRead{5, 0x1000, 0, {}}, checked(Role::None)))).status, 401);
+  EXPECT_EQ(rig.core.counters().auth_failures, 4u);
+  // Allowed: an operator starts, a viewer reads.
+  EXPECT_TRUE(std::holds_alternative<NmtSent>(**rig.run(request(Nmt{5, canopen::NmtCommand::Start},
+                                                                   checked(Role::Operator)))));
+  EXPECT_FALSE(rig.run(request(SdoRead{5, 0x1000, 0, {}}, checked(Role::Viewer)))->has_value()) << "queued";
+  EXPECT_TRUE(rig.audited("NMT start by op@10.0.0.7: net 1 node 5: sent"));
+}
+
+TEST(RequestCoreRoles, AnUndecodableSdoRequestIsRefusedByRoleBeforeItsBodyIsLookedAt) {
+  Rig rig;
+  const auto r = rig.run(request(Undecodable{Operation::sdo_write, 5, "value is required", false},
+                                 checked(Role::Viewer)));
+  EXPECT_EQ(problem_of(r).status, 403);
+  const auto ok = rig.run(request(Undecodable{Operation::sdo_write, 5, "value is required", false}));
+  EXPECT_EQ(problem_of(ok).status, 400);
+  EXPECT_EQ(problem_of(ok).detail, "value is required");
+  // NMT's role depends on the command: the 400 comes first.
+  EXPECT_EQ(problem_of(rig.run(request(Undecodable{Operation::nmt, 5, "command is required", false},
+                                       checked(Role::Viewer))))
+                .status,
+            400);
+}
+
+TEST(RequestCoreCallers, UncheckedCallersAreIdentifiedByTokenAndRateLimited) {
+  RequestCore::Settings s;
+  s.anonymous_role = Role::None;
+  s.rate_limit = 1;
+  s.rate_burst = 2;
+  Rig rig(s, {{"ops", Role::Operator, auth::sha256_hex("secret")}});
+  Caller anonymous;
+  anonymous.transport = Transport::mqtt;
+  const auto no_token = rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}, anonymous));
+  EXPECT_EQ(problem_of(no_token).status, 401);
+  // Anonymous without a role is not refused as a caller but by the command's role.
+  EXPECT_TRUE(rig.audited("auth failure: anonymous: SDO read net 1 node 127: 401"));
+  Caller bad = anonymous;
+  bad.token = "wrong";
+  EXPECT_EQ(problem_of(rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}, bad))).status, 401);
+  EXPECT_TRUE(rig.audited("auth failure: anonymous: request to net 1 node 127: 401 the token is not valid"));
+  // The third tokenless request in the same instant is over the burst: 429 before any audit.
+  const auto audits = rig.audit.size();
+  const auto limited = rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}, anonymous));
+  EXPECT_EQ(problem_of(limited).status, 429);
+  EXPECT_EQ(problem_of(limited).retry_after, 1);
+  EXPECT_EQ(problem_of(limited).detail, "too many requests from MQTT requests without a token; slow down (http.rate-limit)");
+  EXPECT_EQ(rig.audit.size(), audits);
+  EXPECT_EQ(rig.core.counters().requests_rate_limited, 1u);
+  // A token holder has its own bucket, and its role.
+  Caller ops = anonymous;
+  ops.token = "secret";
+  const auto read = rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}, ops));
+  ASSERT_TRUE(std::holds_alternative<SdoValue>(**read));
+  // Time refills the bucket.
+  rig.nets.t += 2s;
+  EXPECT_EQ(problem_of(rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}, anonymous))).status, 401);
+  // Checked callers are not limited here (HTTP's authorizer did that).
+  for (int i = 0; i < 5; ++i)
+    EXPECT_TRUE(std::holds_alternative<SdoValue>(**rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}))));
+}
+
+TEST(RequestCoreSdo, OwnNodeAnswersFromItsDictionaryWithAuditedWrites) {
+  Rig rig;
+  const auto w = rig.run(request(SdoWrite{kOwnNode, 0x1017, 0, {}, 250}));
+  ASSERT_TRUE(std::holds_alternative<SdoValue>(**w));
+  EXPECT_TRUE(rig.audited("SDO write by op@10.0.0.7: net 1 node 127 1017h sub 0 = 250: ok"));
+  const auto r = rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}));
+  ASSERT_TRUE(std::holds_alternative<SdoValue>(**r));
+  EXPECT_EQ(canopen::format_value(std::get<SdoValue>(**r).value), "250");
+  const auto missing = rig.run(request(SdoRead{kOwnNode, 0x2000, 0, {}}));
+  EXPECT_EQ(problem_of(missing).status, 422);
+  EXPECT_EQ(problem_of(missing).abort_code, 0x06020000u);
+  const auto ro = rig.run(request(SdoWrite{kOwnNode, 0x1018, 1, {}, 1}));
+  EXPECT_EQ(problem_of(ro).status, 422);
+  EXPECT_TRUE(rig.audited("SDO write by op@10.0.0.7: net 1 node 127 1018h sub 1 = 1: "));
+  EXPECT_TRUE(rig.nets.pending.empty()) << "nothing on the bus for the own node";
+}
+
+TEST(RequestCoreSdo, ValuesAreTypedAndCheckedBeforeTheBus) {
+  Rig rig;
+  const auto high = rig.run(request(SdoWrite{kDescribed, 0x6060, 0, {}, 11}));
+  EXPECT_EQ(problem_of(high).status, 400);
+  EXPECT_THAT(problem_of(high).detail, HasSubstr("6060h sub 0: "));
+  const auto not_i8 = rig.run(request(SdoWrite{kDescribed, 0x6060, 0, {}, 300}));
+  EXPECT_EQ(problem_of(not_i8).status, 400);
+  const auto unknown = rig.run(request(SdoRead{kDescribed, 0x5FFF, 0, {}}));
+  EXPECT_EQ(problem_of(unknown).status, 404);
+  EXPECT_EQ(problem_of(unknown).detail, "the node's EDS/DCF has no object 5FFFh sub 0 (give ?type= to ask anyway)");
+  EXPECT_TRUE(rig.nets.pending.empty());
+  // In range: downloaded as INTEGER8, audited when the device answers.
+  const auto ok = rig.run(request(SdoWrite{kDescribed, 0x6060, 0, {}, 3}));
+  ASSERT_EQ(rig.nets.downloaded.size(), 1u);
+  EXPECT_EQ(rig.nets.downloaded[0], canopen::Bytes{3});
+  EXPECT_FALSE(ok->has_value());
+  rig.nets.answer();
+  ASSERT_TRUE(ok->has_value());
+  EXPECT_TRUE(rig.audited("SDO write by op@10.0.0.7: net 1 node 5 6060h sub 0 = 3: ok"));
+  // Without an EDS and a type: raw bytes (DOMAIN).
+  const auto raw = rig.run(request(SdoRead{42, 0x1000, 0, {}}));
+  rig.nets.answer({0x91, 0x01});
+  ASSERT_TRUE(std::holds_alternative<SdoValue>(**raw));
+  EXPECT_EQ(std::get<SdoValue>(**raw).value.type, canopen::DataType::Domain);
+  // A typed read the device answers with the wrong size: 502.
+  const auto wrong = rig.run(request(SdoRead{42, 0x1000, 0, canopen::DataType::Unsigned32}));
+  EXPECT_EQ(rig.nets.pending.back().expected_size, 4u) << "a fixed-size type is the size to expect";
+  rig.nets.answer({0x01});
+  EXPECT_EQ(problem_of(wrong).status, 502);
+  EXPECT_EQ(rig.core.counters().sdo_requests, 3u);
+}
+
+TEST(RequestCoreSdo, AbortsAndTimeoutsAreCountedAndTyped) {
+  Rig rig;
+  const auto aborted = rig.run(request(SdoRead{42, 0x1000, 0, canopen::DataType::Unsigned32}));
+  rig.nets.answer({}, make_error_code(canopen::SdoAbort::NoSuchObject));
+  EXPECT_EQ(problem_of(aborted).status, 422);
+  EXPECT_EQ(problem_of(aborted).title, "SDO abort");
+  const auto timed_out = rig.run(request(SdoRead{42, 0x1000, 0, canopen::DataType::Unsigned32}));
+  auto r = std::move(rig.nets.pending.front());
+  rig.nets.pending.pop_front();
+  canopen::sdo::TransferResult res;
+  res.error = make_error_code(canopen::SdoAbort::Timeout);
+  res.origin = canopen::sdo::Origin::Local;
+  r.on_done(std::move(res));
+  EXPECT_EQ(problem_of(timed_out).status, 504);
+  EXPECT_EQ(rig.core.counters().sdo_aborts, 1u);
+  EXPECT_EQ(rig.core.counters().sdo_timeouts, 1u);
+}
+
+TEST(RequestCoreLimits, ACallerGetsItsShareOfANodesQueueAndItIsGivenBack) {
+  Rig rig;
+  const std::size_t share = rig.core.sdo_share();
+  ASSERT_EQ(share, 8u);  // max(2, 32 / 4)
+  const Command read = SdoRead{42, 0x1000, 0, canopen::DataType::Unsigned32};
+  for (std::size_t i = 0; i < share; ++i) EXPECT_FALSE(rig.run(request(read))->has_value());
+  const auto over = rig.run(request(read));
+  EXPECT_EQ(problem_of(over).status, 429);
+  EXPECT_EQ(problem_of(over).retry_after, 1);
+  EXPECT_THAT(problem_of(over).detail, HasSubstr("address 10.0.0.7 has 8 SDO requests waiting for node 42 already"));
+  EXPECT_EQ(rig.core.counters().sdo_share_refused, 1u);
+  // Another caller, and the same caller on another node, still get in.
+  EXPECT_FALSE(rig.run(request(read, checked(Role::Viewer, "address 10.0.0.8")))->has_value());
+  EXPECT_FALSE(rig.run(request(SdoRead{43, 0x1000, 0, canopen::DataType::Unsigned32}))->has_value());
+  // An answer gives the place back.
+  rig.nets.answer({1, 0, 0, 0});
+  EXPECT_FALSE(rig.run(request(read))->has_value());
+  EXPECT_EQ(problem_of(rig.run(request(read))).status, 429);
+  // A write refused for the share is audited.
+  EXPECT_EQ(problem_of(rig.run(request(SdoWrite{42, 0x1000, 0, canopen::DataType::Unsigned32, 1}))).status, 429);
+  EXPECT_TRUE(rig.audited("(address 10.0.0.7 has its share of the node's SDO queue)"));
+}
+
+TEST(RequestCoreLimits, AFullNodeQueueIs429AndGivesThePlaceBack) {
+  Rig rig;
+  rig.nets.queue_full = true;
+  const Command read = SdoRead{42, 0x1000, 0, canopen::DataType::Unsigned32};
+  for (std::size_t i = 0; i < rig.core.sdo_share() + 2; ++i) {
+    const auto r = rig.run(request(read));
+    EXPECT_EQ(problem_of(r).status, 429);
+    EXPECT_EQ(problem_of(r).detail, "too many SDO requests queued for node 42");
+  }
+  EXPECT_EQ(rig.core.counters().sdo_share_refused, 0u) << "the places were given back each time";
+}
+
+TEST(RequestCoreMetrics, SdoLatencyHistogramFromSubmitToResult) {
+  Rig rig;
+  const Command read = SdoRead{42, 0x1000, 0, canopen::DataType::Unsigned32};
+  rig.run(request(read));
+  rig.nets.t += 3ms;  // 0.0025 < 0.003 <= 0.005
+  rig.nets.answer({1, 0, 0, 0});
+  rig.run(request(read));
+  rig.nets.t += 10s;  // slower than the last bound
+  rig.nets.answer({1, 0, 0, 0});
+  const auto& c = rig.core.counters();
+  EXPECT_EQ(c.sdo_latency_count, 2u);
+  EXPECT_NEAR(c.sdo_latency_sum, 10.003, 1e-9);
+  EXPECT_EQ(c.sdo_latency_counts[3], 1u);  // bound 0.005
+  EXPECT_EQ(c.sdo_latency_counts.back(), 1u);
+  // The own node's dictionary answers without a transfer: not in the histogram.
+  rig.run(request(SdoRead{kOwnNode, 0x1017, 0, {}}));
+  EXPECT_EQ(rig.core.counters().sdo_latency_count, 2u);
+}
+
+TEST(RequestCoreOther, SyncAndPdoReadAreAuditedAndChecked) {
+  Rig rig;
+  const auto s = rig.run(request(Sync{7}));
+  ASSERT_TRUE(std::holds_alternative<SyncSent>(**s));
+  EXPECT_EQ(std::get<SyncSent>(**s).counter, 7);
+  ASSERT_EQ(rig.nets.syncs.size(), 1u);
+  EXPECT_TRUE(rig.audited("SYNC by op@10.0.0.7: net 1 counter 7: sent"));
+  const auto no_eds = rig.run(request(PdoConfigRead{42}));
+  EXPECT_EQ(problem_of(no_eds).status, 404);
+  EXPECT_EQ(problem_of(no_eds).detail, "node 42 on network 1 has no EDS/DCF, so its PDOs are not decoded");
+  const auto rpdo = rig.run(request(RpdoWrite{42, 1, "{}"}));
+  EXPECT_EQ(problem_of(rpdo).detail, "node 42 has no EDS/DCF, so its RPDOs are unknown");
+  const auto unused = rig.run(request(RpdoWrite{kDescribed, 1, "{}"}));
+  EXPECT_EQ(problem_of(unused).status, 404);
+}
+
+}  // namespace
+}  // namespace gateway::core
