@@ -278,9 +278,9 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
     const bool read_pdo = it != n.descriptions.end() &&
                           (node.boot && node.boot->read_pdo_config ? *node.boot->read_pdo_config : cfg.read_pdo_config);
     if (node.boot) {
-      canopen::nmt::NodeBootConfig boot;
+      canopen::master::NodeBootConfig boot;
       if (it != n.descriptions.end()) {
-        boot = canopen::nmt::boot_config_from_dcf(it->second);
+        boot = canopen::master::boot_config_from_dcf(it->second);
         if (!node.boot->configure) boot.dcf = nullptr;
         if (!node.boot->check_identity) boot.device_type = boot.vendor_id = boot.product_code = boot.revision =
             boot.serial = std::nullopt;
@@ -289,7 +289,7 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
       n.network->configure_boot(node.id, boot, read_pdo);
     } else if (read_pdo) {
       // Only watched, but its PDOs are read at each boot-up: no checks, no DCF, no start.
-      canopen::nmt::NodeBootConfig watch_only;
+      canopen::master::NodeBootConfig watch_only;
       watch_only.start = false;
       n.network->configure_boot(node.id, watch_only, true);
     }

@@ -201,7 +201,7 @@ void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) 
           std::chrono::duration_cast<std::chrono::microseconds>(opt_.sync_period).count());
       (void)np->od.set(0x1006, 0, Value::of_unsigned(DataType::Unsigned32, us));
       const auto cob = np->od.get_unsigned(0x1005, 0).value_or(0x80);
-      (void)np->od.set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, cob | emcy::kCobIdBit30));
+      (void)np->od.set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, cob | kCobIdBit30));
     }
     np->emcy_active = 0;
   };

@@ -75,8 +75,8 @@
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
 #include "canopen/emcy/emcy.hpp"
-#include "canopen/emcy/sync.hpp"
-#include "canopen/emcy/time.hpp"
+#include "canopen/sync/sync.hpp"
+#include "canopen/time/time.hpp"
 #include "canopen/events.hpp"
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/object_dictionary.hpp"
@@ -218,10 +218,10 @@ class Device {
   nmt::NmtSlave slave_;
   sdo::SdoServer sdo_;
   emcy::EmcyProducer emcy_;
-  emcy::SyncConsumer sync_;
-  emcy::SyncProducer sync_producer_;
-  emcy::TimeConsumer time_consumer_;
-  std::optional<emcy::TimeProducer> time_producer_;  // from start()
+  sync::SyncConsumer sync_;
+  sync::SyncProducer sync_producer_;
+  time::TimeConsumer time_consumer_;
+  std::optional<time::TimeProducer> time_producer_;  // from start()
   pdo::PdoTransmitter tpdo_;
 
   std::vector<Tpdo> tpdos_;

@@ -37,10 +37,10 @@
 #include <vector>
 
 #include "canopen/emcy/emcy.hpp"
-#include "canopen/emcy/sync.hpp"
-#include "canopen/emcy/time.hpp"
+#include "canopen/sync/sync.hpp"
+#include "canopen/time/time.hpp"
 #include "canopen/events.hpp"
-#include "canopen/nmt/boot.hpp"
+#include "canopen/master/boot_configurator.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/pdo/config_reader.hpp"
@@ -68,7 +68,7 @@ class Network {
   // decoded and its RPDOs can be written through rpdo(). Returns problems
   // that leave parts undecodable.
   std::vector<std::string> add_node(std::uint8_t node, const od::ObjectDictionary& description);
-  // Boot-up configuration of `node` (nmt/boot.hpp): on each boot-up its
+  // Boot-up configuration of `node` (master/boot_configurator.hpp): on each boot-up its
   // identity is checked, its DCF written and it is started, as `config`
   // says; every step is a BootConfigEvent in this network's stream.
   // config.dcf MUST outlive the network. With read_pdo_config, after the
@@ -78,7 +78,7 @@ class Network {
   // events follow the read, Done's detail summing it up. Aborts for single
   // PDOs keep the earlier configuration of those PDOs and do not stop the
   // boot; a local error (timeout) is Failed, as for any other step.
-  bool configure_boot(std::uint8_t node, nmt::NodeBootConfig config, bool read_pdo_config = false);
+  bool configure_boot(std::uint8_t node, master::NodeBootConfig config, bool read_pdo_config = false);
   // Reads the PDO configuration of a node added with add_node() from the
   // device by SDO (pdo/config_reader.hpp): every PDO its description has,
   // plus any created by writes. What was read replaces what was in effect
@@ -130,11 +130,11 @@ class Network {
   sdo::SdoClient sdo_;
   pdo::PdoReceiver pdo_;
   pdo::PdoTransmitter rpdo_;
-  std::unique_ptr<nmt::BootConfigurator> boot_;
+  std::unique_ptr<master::BootConfigurator> boot_;
   TimePoint now_{};  // the latest time given to on_frame()/on_time()
   emcy::EmcyConsumer emcy_;
-  emcy::SyncConsumer sync_;
-  emcy::TimeConsumer time_;
+  sync::SyncConsumer sync_;
+  time::TimeConsumer time_;
   pdo::RemotePdoTable pdo_table_;
   pdo::PdoConfigReader pdo_reader_;
   // Nodes whose boot-up reads the PDO configuration -> NMT start afterwards.

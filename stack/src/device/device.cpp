@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <utility>
 
-#include "canopen/emcy/service.hpp"
+#include "canopen/cob_id.hpp"
 #include "canopen/nmt/nmt.hpp"
 
 namespace canopen {

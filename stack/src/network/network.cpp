@@ -52,9 +52,9 @@ std::vector<std::string> Network::add_node(std::uint8_t node, const od::ObjectDi
   return problems;
 }
 
-bool Network::configure_boot(std::uint8_t node, nmt::NodeBootConfig config, bool read_pdo_config) {
+bool Network::configure_boot(std::uint8_t node, master::NodeBootConfig config, bool read_pdo_config) {
   if (!boot_) {
-    boot_ = std::make_unique<nmt::BootConfigurator>(
+    boot_ = std::make_unique<master::BootConfigurator>(
         sdo_, [this](NmtCommand cmd, std::uint8_t n) { nmt_.send_command(cmd, n); },
         [this](const BootConfigEvent& ev) { on_boot_event(ev); }, [this] { return now_; });
   }
