@@ -303,7 +303,6 @@ void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
   // A write to the own 1016h (e.g. over SDO) changes which heartbeats are consumed.
   od.observe(0x1016, [this, np](std::uint8_t) {
     np->network->configure_heartbeat_consumers();
-    np->driver->poke();
     log_.info(np->label + " heartbeat consumers reconfigured from 1016h");
   });
   n.driver->on_frames([this, np](std::span<const Frame> frames) {
@@ -392,7 +391,6 @@ std::error_code App::write_rpdo(std::uint32_t net_number, std::uint8_t node, std
     audit(line + ": " + ec.message());
     return ec;
   }
-  n->driver->poke();
   const auto* p = tx.payload(node, number);
   if (sent != nullptr && p != nullptr) *sent = *p;
   audit(line + " = " + (p != nullptr ? detail::to_hex(*p) : std::string()) + ": sent");
@@ -444,7 +442,6 @@ std::error_code App::read_pdo_config(std::uint32_t net_number, std::uint8_t node
     audit(line + ": " + ec.message());
     return ec;
   }
-  n->driver->poke();
   return {};
 }
 
@@ -529,7 +526,6 @@ void App::start() {
                                                                  : canopen::can::BusEventCause::LinkUp;
     n->network->report(opened);
     n->own->start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
-    n->driver->poke();
     if (n->simulator) n->simulator->start();
   }
   std::string nets;
@@ -683,7 +679,6 @@ void App::own_node_emcy(Net& n, const canopen::can::BusEvent& ev) {
     n.own->raise_emcy(0x8140, kCommunication, now);
     n.own->clear_emcy(0x8140, now);
   }
-  n.driver->poke();
 }
 
 void App::on_stack_event(Net& n, const canopen::Event& ev) {
@@ -694,7 +689,6 @@ void App::on_stack_event(Net& n, const canopen::Event& ev) {
     } else if (n.lost_nodes.erase(s->node) == 1 && n.lost_nodes.empty()) {
       n.own->clear_emcy(0x8130, now);
     }
-    if (n.driver) n.driver->poke();
   }
   log_event(n, ev);
   // Durably reserved before the event leaves the process (one write per block).
@@ -955,7 +949,6 @@ void App::sdo_write(Net& n, const ApiRequest& req, ReplyFn reply) {
       reply(sdo_error_reply(ec, true, {}, opts));
       return;
     }
-    n.driver->poke();
     audit(line + ": ok");
     reply(sdo_response(written, opts));
     return;
@@ -1025,7 +1018,6 @@ void App::submitted(Net& n, const canopen::Result<canopen::sdo::RequestId>& id, 
     reply(std::move(r));
     return;
   }
-  n.driver->poke();
 }
 
 std::optional<ApiReply> App::take_sdo_place(const Net& n, const ApiRequest& req, const ReplyOptions& opts) {
@@ -1061,7 +1053,6 @@ void App::nmt(Net& n, const ApiRequest& req, ReplyFn reply) {
   }
   ++counters_.nmt_commands;
   n.network->send_nmt(params->command, req.node);
-  n.driver->poke();
   audit("NMT " + std::string(nmt_command_name(params->command)) + " by " + requester(req.who) + ": net " +
         std::to_string(n.number) + " node " + std::to_string(req.node) + ": sent");
   reply(nmt_response(n.number, req.node, params->command, opts));

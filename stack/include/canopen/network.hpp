@@ -22,8 +22,10 @@
 // its defaults is only known by reading. See pdo/remote_config.hpp.
 //
 // The caller MUST pass every received frame to on_frame(), call on_time()
-// when now >= next_deadline() (re-read it after any call), and pass bus
-// events to report(). Not thread-safe; handlers run synchronously inside
+// when now >= next_deadline() (re-read after those two calls), and pass bus
+// events to report(). Calls from outside that move the deadline - through
+// nmt(), sdo(), rpdo(), read_pdo_config(), add_node(), ... - report it to
+// the on_deadline_change() observer (canopen/deadline.hpp). Not thread-safe; handlers run synchronously inside
 // those calls.
 #pragma once
 
@@ -36,6 +38,7 @@
 #include <system_error>
 #include <vector>
 
+#include "canopen/deadline.hpp"
 #include "canopen/emcy/emcy.hpp"
 #include "canopen/sync/sync.hpp"
 #include "canopen/time/time.hpp"
@@ -51,7 +54,7 @@
 
 namespace canopen {
 
-class Network {
+class Network : public DeadlineSource {
  public:
   using FrameSink = std::function<void(const can::Frame&)>;
   using EventHandler = std::function<void(const Event&)>;
@@ -104,7 +107,7 @@ class Network {
   nmt::NmtMaster& nmt() { return nmt_; }
   sdo::SdoClient& sdo() { return sdo_; }
   pdo::PdoReceiver& pdo() { return pdo_; }
-  // Process data to the nodes' RPDOs; call the caller's poke afterwards.
+  // Process data to the nodes' RPDOs.
   pdo::PdoTransmitter& rpdo() { return rpdo_; }
   // The seq of the latest event (0: none yet, when the sequence started at 1).
   std::uint64_t last_seq() const { return seq_; }
