@@ -134,10 +134,10 @@ TEST(ServiceDriver, AnSdoRequestSubmittedFromOutsideTimesOut) {
   boost::asio::io_context io;
   can::MemoryBus bus;
   auto ours = bus.attach("ours");
-  ServiceDriver driver(io, *ours);
   sdo::ClientConfig cfg;
   cfg.default_timeout = 20ms;
   sdo::SdoClient client(cfg, [&](const can::Frame& f) { ours->send(f); });
+  ServiceDriver driver(io, *ours);  // services outlive the driver
   driver.add(client);
   io.poll();  // the driver idles: nothing to time yet
   std::optional<sdo::TransferResult> result;
@@ -154,10 +154,10 @@ TEST(ServiceDriver, ADeviceStartedFromOutsideSendsBootUpAndFirstHeartbeat) {
   boost::asio::io_context io;
   can::MemoryBus bus;
   auto ours = bus.attach("ours");
-  ServiceDriver driver(io, *ours);
   auto od = own_dictionary(20, 0);
   std::vector<can::Frame> sent;
   Device dev(od, node5(), [&](const can::Frame& f) { sent.push_back(f); });
+  ServiceDriver driver(io, *ours);
   driver.add(dev);
   io.poll();
   dev.start(SteadyClock::now());
@@ -172,12 +172,12 @@ TEST(ServiceDriver, AnEmcyRaisedFromOutsideIsSentAfterTheInhibitTime) {
   boost::asio::io_context io;
   can::MemoryBus bus;
   auto ours = bus.attach("ours");
-  ServiceDriver driver(io, *ours);
   auto od = own_dictionary(0, 200);  // 1015h: 20 ms
   std::vector<can::Frame> emcys;
   Device dev(od, node5(), [&](const can::Frame& f) {
     if (f.id == 0x85) emcys.push_back(f);
   });
+  ServiceDriver driver(io, *ours);
   driver.add(dev);
   dev.start(SteadyClock::now());
   io.poll();
