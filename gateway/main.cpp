@@ -15,6 +15,7 @@
 #include <boost/asio/signal_set.hpp>
 
 #include "app.hpp"
+#include "composition.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "cli.hpp"
 #include "config.hpp"
@@ -121,7 +122,9 @@ int run(const gateway::CliOptions& opts) {
 
   std::unique_ptr<gateway::App> app;
   try {
-    app = std::make_unique<gateway::App>(io, config, log);
+    // The composition root: one unit per network, its channel opened.
+    auto networks = gateway::compose_networks(io, config, log);
+    app = std::make_unique<gateway::App>(io, config, log, std::move(networks));
   } catch (const gateway::ConfigError& e) {
     print_error(e.what());
     return kExitConfig;

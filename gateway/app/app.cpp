@@ -4,14 +4,13 @@
 #include <filesystem>
 #include <set>
 
-#include "canopen/device.hpp"
 #include "canopen/eds/eds.hpp"
 #include "canopen/network.hpp"
-#include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/socketcan/channel.hpp"
+#include "canopen/socketcan/link_monitor.hpp"
 #include "canopen/socketcan/service_driver.hpp"
+#include "composition.hpp"
 #include "core/format.hpp"
-#include "demo_devices.hpp"
 #include "event_encoder.hpp"
 #include "json_text.hpp"
 #include "mqtt/mqtt_requests.hpp"
@@ -28,12 +27,6 @@ namespace gateway {
 
 namespace {
 
-using canopen::can::Frame;
-
-// Frames of broadcast services the gateway produces itself that its own
-// services must see too (a socket does not receive its own frames).
-bool is_nmt(const Frame& f) { return !f.extended() && !f.remote() && f.id == 0x000; }
-bool is_sync_or_time(const Frame& f) { return !f.extended() && !f.remote() && (f.id == 0x080 || f.id == 0x100); }
 
 std::string pdo_text(const canopen::PdoEvent& ev) {
   std::string s = ev.node == 0 ? "unclaimed PDO " + core::hex_number(ev.cob_id, 3) + "h"
@@ -51,29 +44,9 @@ std::string pdo_text(const canopen::PdoEvent& ev) {
 
 }  // namespace
 
-struct App::Net {
-  std::uint32_t number = 0;
-  NetworkConfig cfg;
-  std::string label;  // "net 1 vcan0"
-  std::shared_ptr<canopen::socketcan::SocketCanChannel> socket;
-  std::unique_ptr<canopen::sim::AsioMemoryBus> memory_bus;
-  std::unique_ptr<canopen::sim::AsioMemoryChannel> memory_gateway, memory_devices;
-  canopen::can::Channel* channel = nullptr;
-  std::optional<canopen::od::ObjectDictionary> own_od;
-  std::unique_ptr<canopen::Device> own;
-  // std::map: stable addresses (the boot configurator keeps DCF pointers).
-  std::map<std::uint8_t, canopen::eds::DeviceDescription> descriptions;
-  std::unique_ptr<canopen::Network> network;
-  std::unique_ptr<canopen::socketcan::ServiceDriver> driver;
-  std::unique_ptr<canopen::sim::Simulator> simulator;
-  // Per node: when the last heartbeat went to MQTT (rate limit).
-  std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
-  std::set<std::uint8_t> lost_nodes;  // for the own node's 8130h EMCY
-  std::optional<SeqStore> seq;         // the event sequence across restarts (from start())
-};
 
 // The request core's view of the networks: each call on the network's
-// services, the driver following the new deadlines.
+// services (which report their new deadlines to the driver themselves).
 struct App::CoreNetworks final : core::Networks {
   explicit CoreNetworks(App& a) : app(a) {}
   App& app;
@@ -85,9 +58,7 @@ struct App::CoreNetworks final : core::Networks {
   std::error_code write_own(std::uint32_t net, std::uint16_t index, std::uint8_t sub,
                             std::span<const std::uint8_t> data) override {
     Net& x = n(net);
-    const auto ec = x.own_od->write(index, sub, data);
-    if (!ec) x.driver->poke();
-    return ec;
+    return x.own_od->write(index, sub, data);  // the own node follows (DeadlineSource)
   }
   const canopen::eds::DeviceDescription* description(std::uint32_t net, std::uint8_t node) const override {
     return app.description(net, node);
@@ -95,21 +66,16 @@ struct App::CoreNetworks final : core::Networks {
   std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const override { return app.bus_state(net); }
   canopen::Result<canopen::sdo::RequestId> sdo_upload(std::uint32_t net, canopen::sdo::Request r) override {
     Net& x = n(net);
-    auto id = x.network->sdo().upload(std::move(r), canopen::SteadyClock::now());
-    if (id) x.driver->poke();
-    return id;
+    return x.network->sdo().upload(std::move(r), x.now());
   }
   canopen::Result<canopen::sdo::RequestId> sdo_download(std::uint32_t net, canopen::sdo::Request r,
                                                         canopen::Bytes data) override {
     Net& x = n(net);
-    auto id = x.network->sdo().download(std::move(r), std::move(data), canopen::SteadyClock::now());
-    if (id) x.driver->poke();
-    return id;
+    return x.network->sdo().download(std::move(r), std::move(data), x.now());
   }
   void send_nmt(std::uint32_t net, canopen::NmtCommand command, std::uint8_t node) override {
     Net& x = n(net);
     x.network->send_nmt(command, node);
-    x.driver->poke();
   }
   const canopen::pdo::PdoConfig* rpdo_config(std::uint32_t net, std::uint8_t node,
                                              std::uint16_t number) const override {
@@ -120,19 +86,14 @@ struct App::CoreNetworks final : core::Networks {
                              canopen::Bytes& sent) override {
     Net& x = n(net);
     auto& tx = x.network->rpdo();
-    const auto now = canopen::SteadyClock::now();
+    const auto now = x.now();
     if (auto ec = raw != nullptr ? tx.set_raw(node, number, *raw, now) : tx.set_values(node, number, values, now))
       return ec;
-    x.driver->poke();
     if (const auto* p = tx.payload(node, number)) sent = *p;
     return {};
   }
   void send_sync(std::uint32_t net, std::optional<std::uint8_t> counter) override {
-    Net& x = n(net);
-    const Frame f =
-        counter ? Frame::standard(0x080, {*counter}) : Frame::standard(0x080, std::span<const std::uint8_t>{});
-    x.channel->send(f);
-    if (x.driver) x.driver->deliver_locally(f, x.network.get());
+    n(net).local->send_sync(counter);  // 1005h's COB-ID, to the bus and the master side
   }
   bool has_pdo_table(std::uint32_t net, std::uint8_t node) const override {
     return n(net).network->pdo_config().has_node(node);
@@ -140,9 +101,7 @@ struct App::CoreNetworks final : core::Networks {
   std::error_code read_pdo_config(std::uint32_t net, std::uint8_t node,
                                   std::function<void(const canopen::pdo::PdoReadReport&)> done) override {
     Net& x = n(net);
-    auto ec = x.network->read_pdo_config(node, std::move(done), canopen::SteadyClock::now());
-    if (!ec) x.driver->poke();
-    return ec;
+    return x.network->read_pdo_config(node, std::move(done), x.now());
   }
 };
 
@@ -154,7 +113,7 @@ struct App::Mqtt {
   std::set<std::string> state_topics;
 };
 
-App::App(boost::asio::io_context& io, Config config, Logger& log)
+App::App(boost::asio::io_context& io, Config config, Logger& log, Composition networks)
     : io_(io),
       config_(std::move(config)),
       log_(log),
@@ -175,220 +134,35 @@ App::App(boost::asio::io_context& io, Config config, Logger& log)
             encode_ctx_.protobuf = mqtt_protobuf || (protobuf_demand_ && protobuf_demand_());
             return encode_event(ev, network, encode_ctx_);
           },
-          cache_) {
-  for (std::size_t i = 0; i < config_.networks.size(); ++i)
-    open_network(static_cast<std::uint32_t>(i + 1), config_.networks[i]);
+          cache_),
+      monitor_(std::move(networks.monitor)),
+      nets_(std::move(networks.units)) {
+  for (auto& n : nets_) attach(*n);
 }
+
+App::App(boost::asio::io_context& io, Config config, Logger& log)
+    : App(io, config, log, compose_networks(io, config, log)) {}
 
 App::~App() { stop(); }
 
-void App::open_network(std::uint32_t number, const NetworkConfig& cfg) {
-  auto net = std::make_unique<Net>();
-  Net& n = *net;
-  n.number = number;
-  n.cfg = cfg;
-  n.label = "net " + std::to_string(number) + " " + (cfg.simulated ? std::string("demo") : cfg.interface);
+void App::attach(Net& n) {
+  Net* np = &n;
+  n.on_event = [this, np](const canopen::Event& ev) { on_stack_event(*np, ev); };
+  n.on_bus_event = [this, np](const canopen::can::BusEvent& ev) { log_bus_event(*np, ev); };
+  cache_.add_network(n.number, n.cfg.simulated ? "demo" : n.cfg.interface, n.cfg.simulated);
+  for (const auto& node : n.cfg.nodes) cache_.add_configured_node(n.number, node.id, node.name);
+}
 
-  // Device descriptions first: a bad file is a configuration error.
-  std::vector<NodeConfig> nodes = cfg.nodes;
-  if (cfg.simulated) nodes = demo_node_configs();
-  for (const auto& node : nodes) {
-    if (node.eds.empty() && !cfg.simulated) continue;
-    try {
-      auto desc = cfg.simulated ? demo_description(node.id) : canopen::eds::load_device_description(node.eds, node.id);
-      if (!desc.warnings.empty()) {
-        log_.info(n.label + " node " + std::to_string(node.id) + ": " + std::to_string(desc.warnings.size()) +
-                  " warning(s) reading " + node.eds + " (accepted; `canopen-eds check " + node.eds +
-                  "` lists them, as does --log-level debug)");
-      }
-      for (const auto& w : desc.warnings) log_.debug(n.label + " node " + std::to_string(node.id) + " EDS: " + w);
-      n.descriptions.emplace(node.id, std::move(desc));
-    } catch (const canopen::eds::EdsError& e) {
-      throw ConfigError(e.what());
-    }
-  }
-  n.cfg.nodes = nodes;
-
-  // The channel: SocketCAN, or an in-process bus shared with simulated devices.
-  if (cfg.simulated) {
-    n.memory_bus = std::make_unique<canopen::sim::AsioMemoryBus>(io_);
-    n.memory_gateway = n.memory_bus->attach("gateway");
-    n.memory_devices = n.memory_bus->attach("devices");
-    n.channel = n.memory_gateway.get();
-  } else {
-    if (!monitor_) monitor_ = canopen::socketcan::LinkMonitor::create(io_);
-    n.socket = canopen::socketcan::SocketCanChannel::open(io_, cfg.interface, monitor_);
-    n.channel = n.socket.get();
-  }
-
-  // The gateway's own node: its dictionary says what it produces.
-  canopen::od::GatewayIdentity identity;
-  identity.software_version = CANOPEN_GATEWAY_VERSION;
-  auto* np = &n;
-  canopen::od::GatewayDictionaryOptions od_options;
-  // 1010h "save" / 1011h "load" (7.5.2.13/14): the power-on values a reset of
-  // the own node returns to, for the life of the process (a restart is a
-  // power-on: the configuration gives the values again).
-  od_options.on_store = [np](std::uint8_t sub) {
-    return np->own ? np->own->store_parameters(sub) : make_error_code(canopen::SdoAbort::CannotStoreDeviceState);
-  };
-  od_options.on_restore = [np](std::uint8_t sub) {
-    return np->own ? np->own->restore_default_parameters(sub)
-                   : make_error_code(canopen::SdoAbort::CannotStoreDeviceState);
-  };
-  // heartbeat-consumer-ms with a time: a 1016h entry (auto and 0 have none).
-  auto consumed = [](const NodeConfig& c) { return c.heartbeat_consumer && c.heartbeat_consumer->count() > 0; };
-  std::size_t consumers = 0;
-  for (const auto& node : n.cfg.nodes) consumers += consumed(node) ? 1 : 0;
-  od_options.heartbeat_consumers = static_cast<std::uint8_t>(std::clamp<std::size_t>(consumers, 8, 127));
-  n.own_od.emplace(canopen::od::make_gateway_dictionary(cfg.node_id, identity, od_options));
-  auto& od = *n.own_od;
-  using canopen::DataType;
-  using canopen::Value;
-  auto set = [&](std::uint16_t index, std::uint8_t sub, Value v, const char* what) {
-    if (auto ec = od.write(index, sub, canopen::encode(v)))
-      throw ConfigError(config_.source + ": " + n.label + ": " + what + ": " + ec.message());
-  };
-  set(0x1017, 0, Value::of_unsigned(DataType::Unsigned16, static_cast<std::uint64_t>(cfg.heartbeat_producer.count())),
-      "heartbeat-ms");
-  std::uint8_t slot = 1;
-  for (const auto& node : n.cfg.nodes) {
-    if (!consumed(node)) continue;
-    set(0x1016, slot++,
-        Value::of_unsigned(DataType::Unsigned32, std::uint64_t{node.id} << 16 |
-                                                     static_cast<std::uint64_t>(node.heartbeat_consumer->count())),
-        "heartbeat-consumer-ms");
-  }
-  if (cfg.sync.window.count() > 0)
-    set(0x1007, 0, Value::of_unsigned(DataType::Unsigned32, static_cast<std::uint64_t>(cfg.sync.window.count())),
-        "sync.window-us");
-  if (cfg.sync.period.count() > 0) {
-    set(0x1006, 0, Value::of_unsigned(DataType::Unsigned32, static_cast<std::uint64_t>(cfg.sync.period.count())),
-        "sync.period-us");
-    if (cfg.sync.counter_overflow != 0)
-      set(0x1019, 0, Value::of_unsigned(DataType::Unsigned8, cfg.sync.counter_overflow), "sync.counter-overflow");
-    set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, 0x40000080), "sync");  // bit 30: this node produces
-  }
-  if (cfg.time.produce) set(0x1012, 0, Value::of_unsigned(DataType::Unsigned32, 0x40000100), "time.produce");
-
-  // One sink per side. What one side broadcasts, the other sees locally:
-  // NMT commands of the master reach the own node (node 0 or its ID), SYNC
-  // and TIME of the own node reach the master side (synchronous RPDO data).
-  // The own node's EMCYs go to the master side too, so they are published
-  // like any node's.
-  const std::uint32_t own_emcy = 0x80U + cfg.node_id;
-  auto device_sink = [np, own_emcy](const Frame& f) {
-    np->channel->send(f);
-    const bool local = is_sync_or_time(f) || (!f.extended() && !f.remote() && f.id == own_emcy);
-    if (local && np->driver) np->driver->deliver_locally(f, np->network.get());
-  };
-  auto master_sink = [np](const Frame& f) {
-    np->channel->send(f);
-    if (is_nmt(f) && np->driver) np->driver->deliver_locally(f, np->own.get());
-  };
-
-  canopen::DeviceConfig dev_cfg;
-  dev_cfg.node_id = cfg.node_id;
-  dev_cfg.time_period = std::chrono::duration_cast<canopen::Duration>(cfg.time.period);
-  dev_cfg.unix_ms = [] {
-    return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::system_clock::now().time_since_epoch())
-        .count();
-  };
-  canopen::DeviceCallbacks dev_cb;
-  const std::string label = n.label;
-  dev_cb.on_state_change = [this, label](canopen::NmtState now_state, canopen::NmtState before) {
-    log_.info(label + " own node " + std::string(canopen::to_string(before)) + " -> " +
-              std::string(canopen::to_string(now_state)));
-    log_.flush();
-  };
-  n.own = std::make_unique<canopen::Device>(od, dev_cfg, device_sink, dev_cb);
-
-  n.network = std::make_unique<canopen::Network>(od, master_sink,
-                                                 [this, np](const canopen::Event& ev) { on_stack_event(*np, ev); });
-  for (const auto& node : n.cfg.nodes) {
-    auto it = n.descriptions.find(node.id);
-    if (it != n.descriptions.end()) {
-      for (const auto& problem : n.network->add_node(node.id, it->second.od))
-        log_.warn(n.label + " node " + std::to_string(node.id) + " PDO: " + problem);
-    }
-    // heartbeat-consumer-ms auto: watched with the node's own 1017h (or a
-    // period learnt from its heartbeats); 0: not watched at all.
-    if (!node.heartbeat_consumer) {
-      n.network->nmt().set_auto_watch(
-          node.id, true,
-          it != n.descriptions.end() ? canopen::nmt::producer_heartbeat_time(it->second.od) : canopen::Duration::zero());
-    } else if (node.heartbeat_consumer->count() == 0) {
-      n.network->nmt().set_auto_watch(node.id, false);
-    }
-    if (node.guarding.guard_time.count() > 0) {
-      n.network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor,
-                                         canopen::SteadyClock::now());
-    }
-    // Reading the PDO configuration needs the description (types, names).
-    const bool read_pdo = it != n.descriptions.end() &&
-                          (node.boot && node.boot->read_pdo_config ? *node.boot->read_pdo_config : cfg.read_pdo_config);
-    if (node.boot) {
-      canopen::nmt::NodeBootConfig boot;
-      if (it != n.descriptions.end()) {
-        boot = canopen::nmt::boot_config_from_dcf(it->second);
-        if (!node.boot->configure) boot.dcf = nullptr;
-        if (!node.boot->check_identity) boot.device_type = boot.vendor_id = boot.product_code = boot.revision =
-            boot.serial = std::nullopt;
-      }
-      boot.start = node.boot->start;
-      n.network->configure_boot(node.id, boot, read_pdo);
-    } else if (read_pdo) {
-      // Only watched, but its PDOs are read at each boot-up: no checks, no DCF, no start.
-      canopen::nmt::NodeBootConfig watch_only;
-      watch_only.start = false;
-      n.network->configure_boot(node.id, watch_only, true);
-    }
-  }
-  cache_.add_network(number, cfg.simulated ? "demo" : cfg.interface, cfg.simulated);
-  for (const auto& node : n.cfg.nodes) cache_.add_configured_node(number, node.id, node.name);
-
-  n.driver = std::make_unique<canopen::socketcan::ServiceDriver>(io_, *n.channel);
-  n.driver->add(*n.own);
-  n.driver->add(*n.network);
-  // A write to the own 1016h (e.g. over SDO) changes which heartbeats are consumed.
-  od.observe(0x1016, [this, np](std::uint8_t) {
-    np->network->configure_heartbeat_consumers();
-    np->driver->poke();
-    log_.info(np->label + " heartbeat consumers reconfigured from 1016h");
-  });
-  n.driver->on_frames([this, np](std::span<const Frame> frames) {
-    if (log_.enabled(LogLevel::Debug)) {
-      for (const auto& f : frames) log_.debug(np->label + " rx " + canopen::can::to_string(f));
-    }
-    log_.flush();
-  });
-  n.channel->on_bus_event([this, np](const canopen::can::BusEvent& ev) {
-    np->network->report(ev);  // bus changes are part of the network's event sequence
-    own_node_emcy(*np, ev);
-    std::string msg = np->label + " bus " + std::string(canopen::can::to_string(ev.previous)) + " -> " +
-                      std::string(canopen::can::to_string(ev.state)) + " (" +
-                      std::string(canopen::can::to_string(ev.cause));
-    if (ev.cause == canopen::can::BusEventCause::RxOverflow) msg += ", " + std::to_string(ev.dropped) + " lost";
-    msg += ", tec " + std::to_string(ev.tx_error_counter) + ", rec " + std::to_string(ev.rx_error_counter) + ")";
-    const bool bad = ev.state != canopen::can::BusState::ErrorActive ||
-                     ev.cause == canopen::can::BusEventCause::RxOverflow;
-    log_.log(bad ? LogLevel::Warn : LogLevel::Info, msg);
-    log_.flush();
-  });
-
-  if (cfg.simulated) {
-    canopen::sim::SimulatorOptions so;
-    so.heartbeat = cfg.simulation.heartbeat;
-    so.tpdo_period = cfg.simulation.tpdo_period;
-    so.emcy_period = cfg.simulation.emcy_period;
-    n.simulator = std::make_unique<canopen::sim::Simulator>(
-        io_, *n.memory_devices, so, [this, label](std::string_view line) {
-          log_.debug(label + " simulator: " + std::string(line));
-        });
-    for (const auto& node : n.cfg.nodes) n.simulator->add_node(node.id, demo_description(node.id));
-  }
-  if (n.channel->state() == canopen::can::BusState::Down) log_.warn(n.label + " is down; waiting for it to come up");
-  nets_.push_back(std::move(net));
+void App::log_bus_event(const Net& n, const canopen::can::BusEvent& ev) {
+  std::string msg = n.label + " bus " + std::string(canopen::can::to_string(ev.previous)) + " -> " +
+                    std::string(canopen::can::to_string(ev.state)) + " (" +
+                    std::string(canopen::can::to_string(ev.cause));
+  if (ev.cause == canopen::can::BusEventCause::RxOverflow) msg += ", " + std::to_string(ev.dropped) + " lost";
+  msg += ", tec " + std::to_string(ev.tx_error_counter) + ", rec " + std::to_string(ev.rx_error_counter) + ")";
+  const bool bad =
+      ev.state != canopen::can::BusState::ErrorActive || ev.cause == canopen::can::BusEventCause::RxOverflow;
+  log_.log(bad ? LogLevel::Warn : LogLevel::Info, msg);
+  log_.flush();
 }
 
 App::Net* App::net(std::uint32_t number) {
@@ -413,7 +187,7 @@ const canopen::od::ObjectDictionary* App::own_dictionary(std::uint32_t net_numbe
 
 std::optional<canopen::NmtState> App::own_state(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return std::nullopt;
-  const auto& own = nets_[net_number - 1]->own;
+  const auto& own = nets_[net_number - 1]->local;
   if (!own) return std::nullopt;
   return own->state();
 }
@@ -436,19 +210,19 @@ const canopen::pdo::PdoConfig* App::rpdo_config(std::uint32_t net_number, std::u
 
 canopen::sim::Simulator* App::simulator(std::uint32_t net_number) {
   Net* n = net(net_number);
-  return n == nullptr ? nullptr : n->simulator.get();
+  return n == nullptr ? nullptr : n->link.simulator.get();
 }
 
 bool App::set_simulated_link(std::uint32_t net_number, bool up) {
   Net* n = net(net_number);
-  if (n == nullptr || !n->memory_gateway) return false;
-  n->memory_gateway->set_link_up(up);
+  if (n == nullptr || !n->link.memory_gateway) return false;
+  n->link.memory_gateway->set_link_up(up);
   return true;
 }
 
 canopen::can::MemoryBus* App::simulated_bus(std::uint32_t net_number) {
   Net* n = net(net_number);
-  return n == nullptr || !n->memory_bus ? nullptr : &n->memory_bus->bus();
+  return n == nullptr || !n->link.memory_bus ? nullptr : &n->link.memory_bus->bus();
 }
 
 std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_number) const {
@@ -514,9 +288,8 @@ void App::start() {
     opened.cause = opened.state == canopen::can::BusState::Down ? canopen::can::BusEventCause::LinkDown
                                                                  : canopen::can::BusEventCause::LinkUp;
     n->network->report(opened);
-    n->own->start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
-    n->driver->poke();
-    if (n->simulator) n->simulator->start();
+    n->local->start(n->now());  // boot-up (7.2.8.3.3), then heartbeats
+    if (n->link.simulator) n->link.simulator->start();
   }
   std::string nets;
   for (const auto& n : nets_) nets += (nets.empty() ? "" : ", ") + n->label;
@@ -589,7 +362,7 @@ void App::stop() {
   if (stopped_) return;
   stopped_ = true;
   for (auto& n : nets_) {
-    if (n->simulator) n->simulator->stop();
+    if (n->link.simulator) n->link.simulator->stop();
   }
   // The CAN side closes: each network's last event says so (the retained
   // bus topic becomes `down`, cause link-down), in order behind the events
@@ -616,14 +389,14 @@ void App::stop() {
   }
   for (auto& n : nets_) {
     n->driver.reset();
-    if (n->socket) {
+    if (n->link.socket) {
       log_.info(n->label + ": " + [&] {
-        const auto s = n->socket->stats();
+        const auto s = n->link.socket->stats();
         return "rx " + std::to_string(s.rx_frames) + " frames, tx " + std::to_string(s.tx_frames) + ", rx dropped " +
                std::to_string(s.rx_dropped) + ", tx dropped " + std::to_string(s.tx_dropped) + ", error frames " +
                std::to_string(s.error_frames) + ", reopens " + std::to_string(s.reopens);
       }());
-      n->socket->close();
+      n->link.socket->close();
     }
   }
   if (monitor_) monitor_->stop();
@@ -636,37 +409,8 @@ void App::stop() {
   log_.flush();
 }
 
-// The gateway's own node reports its communication problems as EMCYs
-// (7.2.7.1, table 21; error register bit 4 "communication"): error passive
-// (8120h) while it lasts, receive overflow (8110h), recovered from bus-off
-// (8140h), a consumed heartbeat or guarded node lost (8130h) while any is.
-void App::own_node_emcy(Net& n, const canopen::can::BusEvent& ev) {
-  constexpr std::uint8_t kCommunication = 0x10;
-  const auto now = canopen::SteadyClock::now();
-  using canopen::can::BusState;
-  if (ev.state == BusState::ErrorPassive) n.own->raise_emcy(0x8120, kCommunication, now);
-  if (ev.state == BusState::ErrorActive) n.own->clear_emcy(0x8120, now);
-  if (ev.cause == canopen::can::BusEventCause::RxOverflow) {
-    n.own->raise_emcy(0x8110, kCommunication, now);
-    n.own->clear_emcy(0x8110, now);
-  }
-  if (ev.previous == BusState::BusOff && ev.state != BusState::BusOff && ev.state != BusState::Down) {
-    n.own->raise_emcy(0x8140, kCommunication, now);
-    n.own->clear_emcy(0x8140, now);
-  }
-  n.driver->poke();
-}
-
+// The own node's EMCYs for lost nodes were raised before (LocalNode, in the unit).
 void App::on_stack_event(Net& n, const canopen::Event& ev) {
-  if (const auto* s = std::get_if<canopen::NodeStateEvent>(&ev.body)) {
-    const auto now = canopen::SteadyClock::now();
-    if (s->cause == canopen::NodeStateEvent::Cause::Lost) {
-      if (n.lost_nodes.insert(s->node).second && n.lost_nodes.size() == 1) n.own->raise_emcy(0x8130, 0x10, now);
-    } else if (n.lost_nodes.erase(s->node) == 1 && n.lost_nodes.empty()) {
-      n.own->clear_emcy(0x8130, now);
-    }
-    if (n.driver) n.driver->poke();
-  }
   log_event(n, ev);
   // Durably reserved before the event leaves the process (one write per block).
   if (auto ec = n.seq ? n.seq->use(ev.seq) : std::error_code())

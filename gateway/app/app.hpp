@@ -63,12 +63,16 @@ struct PdoReadReport;
 
 namespace gateway {
 
+struct Composition;
+struct NetworkUnit;
+
 class App {
  public:
-  // Opens every network and loads every EDS/DCF. Throws ConfigError for a
-  // bad EDS/DCF ("file:line: reason") and socketcan::CanUnavailable when an
-  // interface cannot be opened: configuration problems surface before
-  // anything starts.
+  // Runs on the networks the composition root built for `config`
+  // (compose_networks(), composition.hpp), one unit per network in order.
+  App(boost::asio::io_context& io, Config config, Logger& log, Composition networks);
+  // Builds the networks itself with compose_networks(): throws what it
+  // throws (ConfigError for a bad EDS/DCF, socketcan::CanUnavailable).
   App(boost::asio::io_context& io, Config config, Logger& log);
   ~App();
   App(const App&) = delete;
@@ -168,11 +172,12 @@ class App {
   const Counters& counters() const { return core_.counters(); }
 
  private:
-  struct Net;
+  using Net = NetworkUnit;
   Net* net(std::uint32_t number);
-  void open_network(std::uint32_t number, const NetworkConfig& cfg);
+  // Hooks a built network up to the pipeline, the logs and the state cache.
+  void attach(Net& net);
   void on_stack_event(Net& net, const canopen::Event& ev);
-  void own_node_emcy(Net& net, const canopen::can::BusEvent& ev);
+  void log_bus_event(const Net& net, const canopen::can::BusEvent& ev);
   void log_event(const Net& net, const canopen::Event& ev);
   // Writes one audit line ("audit: <line>", UTC time stamped, flushed at once).
   void audit(const std::string& line);

@@ -36,7 +36,7 @@ struct GuardingConfig {
   std::uint8_t life_time_factor = 0;        // 100Dh
 };
 
-// Boot-up handling of one node in the spirit of CiA 302 (nmt/boot.hpp).
+// Boot-up handling of one node in the spirit of CiA 302 (master/boot_configurator.hpp).
 struct BootConfig {
   bool check_identity = true;  // compare 1000h/1018h with the EDS/DCF
   bool configure = false;      // write the DCF's PDO, heartbeat and ParameterValue entries

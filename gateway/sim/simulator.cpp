@@ -184,7 +184,6 @@ void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) 
         boost::asio::post(io_, [this, np, alive = std::weak_ptr<bool>(alive_)] {
           if (alive.expired() || !running_) return;
           np->device->command(NmtCommand::Start, SteadyClock::now());
-          driver_.poke();
         });
       }
     }
@@ -201,7 +200,7 @@ void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) 
           std::chrono::duration_cast<std::chrono::microseconds>(opt_.sync_period).count());
       (void)np->od.set(0x1006, 0, Value::of_unsigned(DataType::Unsigned32, us));
       const auto cob = np->od.get_unsigned(0x1005, 0).value_or(0x80);
-      (void)np->od.set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, cob | emcy::kCobIdBit30));
+      (void)np->od.set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, cob | kCobIdBit30));
     }
     np->emcy_active = 0;
   };
@@ -232,7 +231,6 @@ void Simulator::start() {
   started_ = SteadyClock::now();
   for (auto& [id, n] : nodes_) driver_.add(*n->device);
   for (auto& [id, n] : nodes_) n->device->start(SteadyClock::now());
-  driver_.poke();
   arm_values();
   arm_emcy();
 }
@@ -269,7 +267,6 @@ bool Simulator::raise_emcy(std::uint8_t node, std::uint16_t code) {
   Device* d = device(node);
   if (d == nullptr || !d->raise_emcy(code, register_bits_for(code), SteadyClock::now())) return false;
   say("node " + std::to_string(node) + " emcy " + hex4(code));
-  driver_.poke();
   return true;
 }
 
@@ -317,7 +314,6 @@ void Simulator::tick_values() {
       }
     }
   }
-  driver_.poke();
 }
 
 void Simulator::tick_emcy() {
@@ -336,7 +332,6 @@ void Simulator::tick_emcy() {
       say("node " + std::to_string(id) + " emcy " + hex4(p.code));
     }
   }
-  driver_.poke();
 }
 
 void Simulator::loopback(const Node* from, const can::Frame& f) {
@@ -355,7 +350,6 @@ void Simulator::loopback(const Node* from, const can::Frame& f) {
       for (auto& [id, n] : nodes_)
         if (n.get() != sender) n->device->on_frame(frame, now);
     }
-    driver_.poke();
   });
 }
 

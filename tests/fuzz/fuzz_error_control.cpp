@@ -8,15 +8,15 @@
 // starts with its first heartbeat), the guarded node also when it never
 // answered the polls; nothing crashes, leaks or hits UB. A decoded PDO never carries more values than its mapping has
 // entries, and claimed PDOs name node 5.
-// fuzz-libs: canopen_nmt canopen_emcy canopen_pdo
+// fuzz-libs: canopen_nmt canopen_emcy canopen_sync canopen_time canopen_pdo
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <set>
 
 #include "canopen/emcy/emcy.hpp"
-#include "canopen/emcy/sync.hpp"
-#include "canopen/emcy/time.hpp"
+#include "canopen/sync/sync.hpp"
+#include "canopen/time/time.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/eds/eds.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
@@ -77,14 +77,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     check_node(e.node);
     if (e.description.empty()) bad = true;
   });
-  canopen::emcy::SyncConsumer sync(dictionary(), [](const canopen::SyncEvent&) {});
+  canopen::sync::SyncConsumer sync(dictionary(), [](const canopen::SyncEvent&) {});
   canopen::pdo::PdoReceiver pdo([](const canopen::can::Frame&) {}, [&](canopen::PdoEvent e) {
     if (e.node != 0 && e.node != 5) bad = true;
     if (e.values.size() > 64) bad = true;
   });
   (void)pdo.add_node(5, io_module());
   pdo.set_sync_window([&sync](canopen::TimePoint t) { return sync.in_sync_window(t); });
-  canopen::emcy::TimeConsumer time(dictionary(), [](const canopen::TimeEvent&) {});
+  canopen::time::TimeConsumer time(dictionary(), [](const canopen::TimeEvent&) {});
 
   for (std::size_t i = 0; i + 11 <= size; i += 11) {
     const std::uint8_t sel = data[i];

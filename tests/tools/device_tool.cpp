@@ -115,7 +115,6 @@ int run(const std::vector<std::string>& a) {
   canopen::socketcan::ServiceDriver driver(io, *channel);
   driver.add(device);
   device.start(canopen::SteadyClock::now());  // boot-up (7.2.8.3.3), then heartbeats
-  driver.poke();
 
   boost::asio::steady_timer emcy_timer(io);
   if (emcy_after_ms) {
@@ -125,7 +124,6 @@ int run(const std::vector<std::string>& a) {
       char code[8];
       std::snprintf(code, sizeof code, "%04X", emcy_code);
       if (device.raise_emcy(emcy_code, 0, canopen::SteadyClock::now())) say(std::string("emcy ") + code);
-      driver.poke();
     });
   }
 
@@ -139,7 +137,6 @@ int run(const std::vector<std::string>& a) {
         if (auto v = od.get(index, sub)) {
           const auto next = incremented(*v);
           if (!device.set(index, sub, next, canopen::SteadyClock::now())) say("tpdo " + canopen::format_value(next));
-          driver.poke();
         }
       }
       tpdo_tick();

@@ -171,7 +171,6 @@ int transfer(bool upload, const std::vector<std::string>& a) {
     std::fprintf(stderr, "sdo_tool: %s %s\n", id.error().code.message().c_str(), id.error().detail.c_str());
     return 2;
   }
-  driver.poke();
   bus.io.run();
   std::fflush(stdout);
   return rc;

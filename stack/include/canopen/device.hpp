@@ -14,9 +14,14 @@
 //   - call start(now) once (power-on: boot-up message, pre-operational);
 //   - pass every received frame to on_frame() (other nodes' frames are
 //     ignored, so the whole bus is fine) and call on_time(now) whenever
-//     now >= next_deadline(); re-read next_deadline() after every call,
-//     including set()/raise_emcy()/command(), and after changing the
-//     dictionary directly (next_deadline() then returns TimePoint::min()).
+//     now >= next_deadline(), re-reading it after its own on_frame() and
+//     on_time() calls.
+// Every other change of the deadline - start(), set(), command(),
+// raise_emcy(), clear_emcy(), reconfigure_pdos(), on_frame() from outside
+// a driver, a direct write of the dictionary (then TimePoint::min()) - is
+// reported to the on_deadline_change() observer (canopen/deadline.hpp)
+// when the call returns. Changes made through the nmt() and emcy()
+// accessors are not: use the Device's own methods.
 //
 // Behaviour (CiA 301 sections in brackets):
 //   - Services by NMT state (7.3.2.2.5, table 37): PDOs only in
@@ -74,9 +79,10 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
+#include "canopen/deadline.hpp"
 #include "canopen/emcy/emcy.hpp"
-#include "canopen/emcy/sync.hpp"
-#include "canopen/emcy/time.hpp"
+#include "canopen/sync/sync.hpp"
+#include "canopen/time/time.hpp"
 #include "canopen/events.hpp"
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/object_dictionary.hpp"
@@ -120,7 +126,7 @@ struct DeviceCallbacks {
   std::function<void(nmt::LifeGuardingEvent)> on_life_guarding = nullptr;
 };
 
-class Device {
+class Device : public DeadlineSource {
  public:
   using FrameSink = std::function<void(const can::Frame&)>;
 
@@ -197,6 +203,8 @@ class Device {
   Parameters parameters(std::uint16_t first, std::uint16_t last) const;
   void restore_power_on(std::uint16_t first, std::uint16_t last);
   void observed(std::uint16_t index, std::uint8_t sub);
+  void observed_in_call(std::uint16_t index, std::uint8_t sub);
+  struct Outermost;
   void settle(TimePoint now);
   void rebuild_pdos(TimePoint now);
   void handle_rpdo(Rpdo& r, const can::Frame& f, TimePoint now);
@@ -218,10 +226,10 @@ class Device {
   nmt::NmtSlave slave_;
   sdo::SdoServer sdo_;
   emcy::EmcyProducer emcy_;
-  emcy::SyncConsumer sync_;
-  emcy::SyncProducer sync_producer_;
-  emcy::TimeConsumer time_consumer_;
-  std::optional<emcy::TimeProducer> time_producer_;  // from start()
+  sync::SyncConsumer sync_;
+  sync::SyncProducer sync_producer_;
+  time::TimeConsumer time_consumer_;
+  std::optional<time::TimeProducer> time_producer_;  // from start()
   pdo::PdoTransmitter tpdo_;
 
   std::vector<Tpdo> tpdos_;
@@ -237,6 +245,7 @@ class Device {
   bool pdo_dirty_ = false;
   bool sync_dirty_ = false;
   bool in_call_ = false;
+  int depth_ = 0;  // public calls in progress (Outermost)
 };
 
 }  // namespace canopen

@@ -22,8 +22,10 @@
 // its defaults is only known by reading. See pdo/remote_config.hpp.
 //
 // The caller MUST pass every received frame to on_frame(), call on_time()
-// when now >= next_deadline() (re-read it after any call), and pass bus
-// events to report(). Not thread-safe; handlers run synchronously inside
+// when now >= next_deadline() (re-read after those two calls), and pass bus
+// events to report(). Calls from outside that move the deadline - through
+// nmt(), sdo(), rpdo(), read_pdo_config(), add_node(), ... - report it to
+// the on_deadline_change() observer (canopen/deadline.hpp). Not thread-safe; handlers run synchronously inside
 // those calls.
 #pragma once
 
@@ -36,11 +38,12 @@
 #include <system_error>
 #include <vector>
 
+#include "canopen/deadline.hpp"
 #include "canopen/emcy/emcy.hpp"
-#include "canopen/emcy/sync.hpp"
-#include "canopen/emcy/time.hpp"
+#include "canopen/sync/sync.hpp"
+#include "canopen/time/time.hpp"
 #include "canopen/events.hpp"
-#include "canopen/nmt/boot.hpp"
+#include "canopen/master/boot_configurator.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/pdo/config_reader.hpp"
@@ -51,7 +54,7 @@
 
 namespace canopen {
 
-class Network {
+class Network : public DeadlineSource {
  public:
   using FrameSink = std::function<void(const can::Frame&)>;
   using EventHandler = std::function<void(const Event&)>;
@@ -68,7 +71,7 @@ class Network {
   // decoded and its RPDOs can be written through rpdo(). Returns problems
   // that leave parts undecodable.
   std::vector<std::string> add_node(std::uint8_t node, const od::ObjectDictionary& description);
-  // Boot-up configuration of `node` (nmt/boot.hpp): on each boot-up its
+  // Boot-up configuration of `node` (master/boot_configurator.hpp): on each boot-up its
   // identity is checked, its DCF written and it is started, as `config`
   // says; every step is a BootConfigEvent in this network's stream.
   // config.dcf MUST outlive the network. With read_pdo_config, after the
@@ -78,7 +81,7 @@ class Network {
   // events follow the read, Done's detail summing it up. Aborts for single
   // PDOs keep the earlier configuration of those PDOs and do not stop the
   // boot; a local error (timeout) is Failed, as for any other step.
-  bool configure_boot(std::uint8_t node, nmt::NodeBootConfig config, bool read_pdo_config = false);
+  bool configure_boot(std::uint8_t node, master::NodeBootConfig config, bool read_pdo_config = false);
   // Reads the PDO configuration of a node added with add_node() from the
   // device by SDO (pdo/config_reader.hpp): every PDO its description has,
   // plus any created by writes. What was read replaces what was in effect
@@ -104,7 +107,7 @@ class Network {
   nmt::NmtMaster& nmt() { return nmt_; }
   sdo::SdoClient& sdo() { return sdo_; }
   pdo::PdoReceiver& pdo() { return pdo_; }
-  // Process data to the nodes' RPDOs; call the caller's poke afterwards.
+  // Process data to the nodes' RPDOs.
   pdo::PdoTransmitter& rpdo() { return rpdo_; }
   // The seq of the latest event (0: none yet, when the sequence started at 1).
   std::uint64_t last_seq() const { return seq_; }
@@ -130,11 +133,11 @@ class Network {
   sdo::SdoClient sdo_;
   pdo::PdoReceiver pdo_;
   pdo::PdoTransmitter rpdo_;
-  std::unique_ptr<nmt::BootConfigurator> boot_;
+  std::unique_ptr<master::BootConfigurator> boot_;
   TimePoint now_{};  // the latest time given to on_frame()/on_time()
   emcy::EmcyConsumer emcy_;
-  emcy::SyncConsumer sync_;
-  emcy::TimeConsumer time_;
+  sync::SyncConsumer sync_;
+  time::TimeConsumer time_;
   pdo::RemotePdoTable pdo_table_;
   pdo::PdoConfigReader pdo_reader_;
   // Nodes whose boot-up reads the PDO configuration -> NMT start afterwards.

@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <utility>
 
-#include "canopen/emcy/service.hpp"
+#include "canopen/cob_id.hpp"
 #include "canopen/nmt/nmt.hpp"
 
 namespace canopen {
@@ -106,7 +106,30 @@ void Device::install_observers() {
   }
 }
 
+// Reports the next deadline when the outermost public call returns (the
+// nested ones, e.g. set() from a callback, leave it to the outer one).
+struct Device::Outermost {
+  explicit Outermost(Device& d) : device(d) { ++device.depth_; }
+  ~Outermost() {
+    if (--device.depth_ == 0 && device.deadline_observed()) device.report_deadline(device.next_deadline());
+  }
+  Outermost(const Outermost&) = delete;
+  Outermost& operator=(const Outermost&) = delete;
+  Device& device;
+};
+
 void Device::observed(std::uint16_t index, std::uint8_t sub) {
+  // The application wrote the dictionary directly (not through a Device
+  // method): what it changed is run at the next on_time(), at once.
+  if (depth_ == 0 && !in_call_) {
+    const Outermost call(*this);
+    observed_in_call(index, sub);
+    return;
+  }
+  observed_in_call(index, sub);
+}
+
+void Device::observed_in_call(std::uint16_t index, std::uint8_t sub) {
   if (is_pdo_parameter(index)) {
     pdo_dirty_ = true;
     return;
@@ -123,6 +146,7 @@ void Device::observed(std::uint16_t index, std::uint8_t sub) {
 }
 
 void Device::start(TimePoint now) {
+  const Outermost call(*this);
   now_ = now;
   in_call_ = true;
   if (!started_) {
@@ -143,6 +167,7 @@ void Device::start(TimePoint now) {
 }
 
 bool Device::on_frame(const can::Frame& frame, TimePoint now) {
+  const Outermost call(*this);
   now_ = now;
   in_call_ = true;
   bool mine = false;
@@ -210,6 +235,7 @@ TimePoint Device::next_deadline() const {
 }
 
 std::error_code Device::set(std::uint16_t index, std::uint8_t sub, Value value, TimePoint now) {
+  const Outermost call(*this);
   now_ = now;
   auto ec = od_.set(index, sub, std::move(value));
   settle(now);
@@ -217,6 +243,7 @@ std::error_code Device::set(std::uint16_t index, std::uint8_t sub, Value value, 
 }
 
 void Device::command(NmtCommand cs, TimePoint now) {
+  const Outermost call(*this);
   now_ = now;
   in_call_ = true;
   slave_.command(cs, now);
@@ -226,6 +253,7 @@ void Device::command(NmtCommand cs, TimePoint now) {
 
 bool Device::raise_emcy(std::uint16_t code, std::uint8_t register_bits, TimePoint now,
                         const emcy::ManufacturerField& manufacturer) {
+  const Outermost call(*this);
   now_ = now;
   const bool r = emcy_.raise(code, register_bits, now, manufacturer);
   settle(now);
@@ -233,6 +261,7 @@ bool Device::raise_emcy(std::uint16_t code, std::uint8_t register_bits, TimePoin
 }
 
 bool Device::clear_emcy(std::uint16_t code, TimePoint now) {
+  const Outermost call(*this);
   now_ = now;
   const bool r = emcy_.clear(code, now);
   settle(now);
@@ -245,6 +274,7 @@ bool Device::send_time(std::int64_t unix_ms) {
 }
 
 void Device::reconfigure_pdos(TimePoint now) {
+  const Outermost call(*this);
   now_ = now;
   rebuild_pdos(now);
   settle(now);

@@ -38,6 +38,12 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
   sdo_.set_download_observer([this](std::uint8_t node, const sdo::Multiplexer& mux, const Bytes& data) {
     if (auto key = pdo_table_.apply_download(node, mux.index, mux.sub, data)) refresh_pdo(node, *key);
   });
+  // Calls from outside through nmt(), sdo() and rpdo() move their
+  // deadlines: the network's driver hears of it from here.
+  const auto forward = [this](TimePoint next) { report_deadline(next); };
+  nmt_.on_deadline_change(forward);
+  sdo_.on_deadline_change(forward);
+  rpdo_.on_deadline_change(forward);
   configure_heartbeat_consumers();
 }
 
@@ -52,9 +58,9 @@ std::vector<std::string> Network::add_node(std::uint8_t node, const od::ObjectDi
   return problems;
 }
 
-bool Network::configure_boot(std::uint8_t node, nmt::NodeBootConfig config, bool read_pdo_config) {
+bool Network::configure_boot(std::uint8_t node, master::NodeBootConfig config, bool read_pdo_config) {
   if (!boot_) {
-    boot_ = std::make_unique<nmt::BootConfigurator>(
+    boot_ = std::make_unique<master::BootConfigurator>(
         sdo_, [this](NmtCommand cmd, std::uint8_t n) { nmt_.send_command(cmd, n); },
         [this](const BootConfigEvent& ev) { on_boot_event(ev); }, [this] { return now_; });
   }

@@ -142,6 +142,7 @@ void NmtMaster::auto_heard(std::uint8_t node, TimePoint now, bool boot_up, bool 
 }
 
 bool NmtMaster::set_auto_watch(std::uint8_t node, bool enabled, Duration period) {
+  const Report<NmtMaster> deadline_report(*this);  // the driver follows
   if (!valid_node(node)) return false;
   AutoWatch& w = auto_[node];
   if (!enabled) {
@@ -197,6 +198,7 @@ void NmtMaster::on_time(TimePoint now) {
 }
 
 bool NmtMaster::set_heartbeat_consumer(std::uint8_t node, Duration time) {
+  const Report<NmtMaster> deadline_report(*this);  // the driver follows
   if (!valid_node(node)) return false;
   if (time <= Duration::zero()) {
     consumers_.erase(node);
@@ -208,6 +210,7 @@ bool NmtMaster::set_heartbeat_consumer(std::uint8_t node, Duration time) {
 }
 
 void NmtMaster::configure_consumers(const od::ObjectDictionary& dictionary) {
+  const Report<NmtMaster> deadline_report(*this);  // the driver follows
   std::map<std::uint8_t, Duration> wanted;
   if (const od::Object* obj = dictionary.find(kConsumerHeartbeat)) {
     for (const auto& [sub, entry] : obj->subs) {
@@ -226,6 +229,7 @@ void NmtMaster::configure_consumers(const od::ObjectDictionary& dictionary) {
 
 bool NmtMaster::set_node_guarding(std::uint8_t node, Duration guard_time, std::uint8_t life_time_factor,
                                   TimePoint now) {
+  const Report<NmtMaster> deadline_report(*this);  // the driver follows
   if (!valid_node(node)) return false;
   if (guard_time <= Duration::zero() || life_time_factor == 0) {
     guarding_.erase(node);

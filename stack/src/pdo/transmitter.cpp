@@ -9,6 +9,7 @@ namespace canopen::pdo {
 
 Result<std::size_t> PdoTransmitter::add_from(std::uint8_t node, Direction dir, std::uint16_t number,
                                              const od::ObjectDictionary& dict, TimePoint now, std::size_t max_bytes) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   auto cfg = read_pdo(dict, dir, number, max_bytes);
   if (!cfg) return cfg.error();
   auto r = add(node, std::move(*cfg), now);
@@ -25,6 +26,7 @@ Result<std::size_t> PdoTransmitter::add_from(std::uint8_t node, Direction dir, s
 }
 
 Result<std::size_t> PdoTransmitter::add(std::uint8_t node, PdoConfig cfg, TimePoint now) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   if (!cfg.comm.cob_id.valid())
     return Error{make_error_code(SdoAbort::NoSuchObject), "PDO is not valid (COB-ID bit 31 set)"};
   if (cfg.kind != MappingKind::Normal)
@@ -44,6 +46,7 @@ void PdoTransmitter::remove(std::uint8_t node, std::uint16_t number) { pdos_.era
 
 Result<std::size_t> PdoTransmitter::reconfigure(std::uint8_t node, PdoConfig cfg, TimePoint now,
                                                 const od::ObjectDictionary* initial) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   const std::uint16_t number = cfg.number;
   std::optional<Tx> before;
   if (Tx* old = find(node, number)) before = std::move(*old);
@@ -97,12 +100,14 @@ const Bytes* PdoTransmitter::payload(std::uint8_t node, std::uint16_t number) co
 
 std::error_code PdoTransmitter::set_value(std::uint8_t node, std::uint16_t number, std::uint16_t index,
                                           std::uint8_t sub, const Value& v, TimePoint now) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   const MappedValue mv{index, sub, {}, v};
   return set_values(node, number, std::span<const MappedValue>(&mv, 1), now);
 }
 
 std::error_code PdoTransmitter::set_values(std::uint8_t node, std::uint16_t number,
                                            std::span<const MappedValue> values, TimePoint now) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   Tx* tx = find(node, number);
   if (!tx) return make_error_code(SdoAbort::NoSuchObject);
   Bytes next = tx->payload;  // all or nothing
@@ -121,6 +126,7 @@ std::error_code PdoTransmitter::set_values(std::uint8_t node, std::uint16_t numb
 
 std::error_code PdoTransmitter::set_raw(std::uint8_t node, std::uint16_t number, std::span<const std::uint8_t> bytes,
                                         TimePoint now) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   Tx* tx = find(node, number);
   if (!tx) return make_error_code(SdoAbort::NoSuchObject);
   if (bytes.size() != tx->payload.size()) return make_error_code(SdoAbort::LengthMismatch);
@@ -161,6 +167,7 @@ void PdoTransmitter::send(Tx& tx, const Bytes& data, TimePoint now) {
 }
 
 void PdoTransmitter::on_sync(std::optional<std::uint8_t> counter, TimePoint now) {
+  const Report<PdoTransmitter> deadline_report(*this);  // the driver follows
   for (auto& [key, tx] : pdos_) {
     const CommParams& c = tx.cfg.comm;
     if (c.transmission_type == 0) {

@@ -42,6 +42,7 @@ SdoClient::SdoClient(ClientConfig config, FrameSink sink) : cfg_(config), sink_(
 // ---- submission and queueing ------------------------------------------------------
 
 Result<RequestId> SdoClient::upload(Request request, TimePoint now) {
+  const Report<SdoClient> deadline_report(*this);  // the driver follows
   Job job;
   job.upload = true;
   job.req = std::move(request);
@@ -49,6 +50,7 @@ Result<RequestId> SdoClient::upload(Request request, TimePoint now) {
 }
 
 Result<RequestId> SdoClient::download(Request request, Bytes data, TimePoint now) {
+  const Report<SdoClient> deadline_report(*this);  // the driver follows
   if (request.mode == Mode::Expedited && (data.empty() || data.size() > kExpeditedMax)) {
     return Error{std::make_error_code(std::errc::invalid_argument),
                  "an expedited download carries 1 to 4 bytes, not " + std::to_string(data.size())};
@@ -179,6 +181,7 @@ void SdoClient::fail_local(std::uint8_t node, std::error_code ec, std::string de
 }
 
 bool SdoClient::cancel(RequestId id, TimePoint now) {
+  const Report<SdoClient> deadline_report(*this);  // the driver follows
   for (std::size_t i = 1; i < nodes_.size(); ++i) {
     const auto node = static_cast<std::uint8_t>(i);
     Node& n = nodes_[node];

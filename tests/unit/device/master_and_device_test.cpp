@@ -12,7 +12,7 @@
 #include "canopen/device.hpp"
 #include "canopen/eds/eds.hpp"
 #include "canopen/network.hpp"
-#include "canopen/nmt/boot.hpp"
+#include "canopen/master/boot_configurator.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/pdo/transmitter.hpp"
 
@@ -53,7 +53,7 @@ struct MasterAndDevice {
     gw_ep->on_frames([this](std::span<const can::Frame> fs) {
       for (const auto& f : fs) net->on_frame(f, clock.now());
     });
-    boot = std::make_unique<nmt::BootConfigurator>(
+    boot = std::make_unique<master::BootConfigurator>(
         net->sdo(), [this](NmtCommand cs, std::uint8_t node) { net->nmt().send_command(cs, node); },
         [this](const BootConfigEvent& e) { steps.push_back(e.step); }, [this] { return clock.now(); });
   }
@@ -97,7 +97,7 @@ struct MasterAndDevice {
   eds::DeviceDescription dcf;
   std::unique_ptr<Device> device;
   std::unique_ptr<Network> net;
-  std::unique_ptr<nmt::BootConfigurator> boot;
+  std::unique_ptr<master::BootConfigurator> boot;
   pdo::PdoTransmitter rpdo{[this](const can::Frame& f) { gw_ep->send(f); }};
   std::vector<Seen> seen;
   std::vector<BootConfigEvent::Step> steps;
@@ -106,7 +106,7 @@ struct MasterAndDevice {
 TEST(MasterAndDevice, MasterAndDevice_7_2_2_BootConfigureStartPdoBothWaysLossAtConsumerTimeAndRecovery) {
   MasterAndDevice m;
   ASSERT_TRUE(m.net->add_node(kNode, m.dcf.od).empty());
-  ASSERT_TRUE(m.boot->configure(kNode, nmt::boot_config_from_dcf(m.dcf)));
+  ASSERT_TRUE(m.boot->configure(kNode, master::boot_config_from_dcf(m.dcf)));
   ASSERT_TRUE(m.net->nmt().set_heartbeat_consumer(kNode, 250ms));
 
   // Boot-up (7.2.8.3.3) starts the configuration from the DCF and the NMT start.
@@ -175,7 +175,7 @@ TEST(MasterAndDevice, MasterAndDevice_7_2_2_BootConfigureStartPdoBothWaysLossAtC
 TEST(MasterAndDevice, MasterAndDevice_7_2_8_3_1_ResetNodeFromMasterReconfiguresAndRestarts) {
   MasterAndDevice m;
   ASSERT_TRUE(m.net->add_node(kNode, m.dcf.od).empty());
-  ASSERT_TRUE(m.boot->configure(kNode, nmt::boot_config_from_dcf(m.dcf)));
+  ASSERT_TRUE(m.boot->configure(kNode, master::boot_config_from_dcf(m.dcf)));
   m.device->start(m.clock.now());
   m.run_for(2s);
   ASSERT_EQ(m.device->state(), NmtState::Operational);

@@ -71,7 +71,6 @@ TEST(Simulator, DriveAndIoModule_BootHeartbeatAndAfterNmtStartChangingTpdoValues
   EXPECT_TRUE(b.net.add_node(kDrive, drive.od).empty());
   EXPECT_TRUE(b.net.add_node(kIo, io_module.od).empty());
   b.sim.start();
-  b.driver.poke();
   b.io.run_for(1200ms);  // bounded: the simulator never stops by itself
   b.sim.stop();
 
@@ -108,7 +107,6 @@ TEST(Simulator, EmcyOnCommandAndPeriodic_ReachTheMasterWithTheStandardsText) {
   Bench b(opt);
   b.sim.add_node(kDrive, source_path("deploy/eds/cia402-drive.eds"));
   b.sim.start();
-  b.driver.poke();
   b.io.run_for(50ms);
   EXPECT_TRUE(b.sim.raise_emcy(kDrive, 0x8110));
   b.io.run_for(500ms);  // the first periodic EMCY is due at 100 ms; slack for loaded machines
@@ -128,10 +126,8 @@ TEST(Simulator, ResetNode_RebootsWithBootUpAndRestoresHeartbeat) {
   Bench b(opt);
   b.sim.add_node(kDrive, source_path("deploy/eds/cia402-drive.eds"));
   b.sim.start();
-  b.driver.poke();
   b.io.run_for(100ms);
   b.net.nmt().send_command(NmtCommand::ResetNode, kDrive);
-  b.driver.poke();
   b.io.run_for(200ms);
   b.sim.stop();
   std::size_t boots = 0;

@@ -151,7 +151,7 @@ TEST(Network, FrameEventsCarryTheFramesReceiveTimeAndTimerEventsTheWallTime) {
 // same stream, after the boot-up it follows.
 TEST(Network, BootUpConfigurationStepsJoinTheStream_7_2_8_3_3) {
   Rig rig;
-  auto cfg = nmt::boot_config_from_dcf(rig.desc);
+  auto cfg = master::boot_config_from_dcf(rig.desc);
   ASSERT_TRUE(rig.net.configure_boot(kDevice, cfg));
   rig.slave.start(rig.clock.now());
   for (int i = 0; i < 200 && rig.slave.state() != nmt::NmtSlave::State::Operational; ++i) rig.step(1ms);
@@ -167,7 +167,7 @@ TEST(Network, BootUpConfigurationStepsJoinTheStream_7_2_8_3_3) {
 
 TEST(Network, BootUpConfigurationOfASilentNodeFailsWithTimeout) {
   Rig rig;
-  ASSERT_TRUE(rig.net.configure_boot(kDevice, nmt::boot_config_from_dcf(rig.desc)));
+  ASSERT_TRUE(rig.net.configure_boot(kDevice, master::boot_config_from_dcf(rig.desc)));
   rig.slave.start(rig.clock.now());
   ASSERT_TRUE(rig.bus.deliver_one());  // only the boot-up
   rig.dev_ep->set_link_up(false);      // then the node says nothing more

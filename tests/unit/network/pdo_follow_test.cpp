@@ -240,7 +240,7 @@ TEST(PdoFollow, PdoFollow_7_2_2_ReadPdoConfigAtBootDecodesWithTheDevicesMapping)
   ASSERT_FALSE(rig.device_od.set(0x1A00, 1, Value::of_unsigned(DataType::Unsigned32, 0x606C0020)));
   ASSERT_FALSE(rig.device_od.set(0x1A00, 2, Value::of_unsigned(DataType::Unsigned32, 0x60410010)));
   ASSERT_TRUE(rig.device_od.erase(0x1803));  // this device has only three TPDOs
-  nmt::NodeBootConfig boot;
+  master::NodeBootConfig boot;
   boot.start = true;
   ASSERT_TRUE(rig.net.configure_boot(kNode, boot, true));
 

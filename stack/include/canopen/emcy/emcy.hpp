@@ -20,11 +20,16 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
-#include "canopen/emcy/service.hpp"
+#include "canopen/cob_id.hpp"
 #include "canopen/events.hpp"
 #include "canopen/od/object_dictionary.hpp"
 
 namespace canopen::emcy {
+
+// Where the service emits its frames. Called synchronously from the
+// service's methods; it must not call back into the service that called it.
+using FrameSink = std::function<void(const can::Frame&)>;
+
 
 using ManufacturerField = std::array<std::uint8_t, 5>;
 

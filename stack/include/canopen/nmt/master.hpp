@@ -8,6 +8,8 @@
 //   - pass every received frame to on_frame() (only 701h..77Fh are used);
 //   - call on_time(now) when now >= next_deadline() (consumer timeouts,
 //     guarding requests, node life time expiry).
+// The set_*() and configure_consumers() calls report the new deadline to
+// the on_deadline_change() observer (canopen/deadline.hpp).
 //
 // Behaviour, as chosen here where the standard leaves room:
 //   - Events carry the receive timestamp of the frame that caused them;
@@ -54,6 +56,7 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
+#include "canopen/deadline.hpp"
 #include "canopen/events.hpp"
 #include "canopen/nmt/nmt.hpp"
 #include "canopen/od/object_dictionary.hpp"
@@ -79,7 +82,7 @@ struct NodeStatus {
 // NmtMaster::set_auto_watch(). Zero when the description has none or 0.
 Duration producer_heartbeat_time(const od::ObjectDictionary& description);
 
-class NmtMaster {
+class NmtMaster : public DeadlineSource {
  public:
   NmtMaster(FrameSink sink, EventSink events);
 

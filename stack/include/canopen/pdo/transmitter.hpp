@@ -20,7 +20,9 @@
 //   - call on_time(now) when now >= next_deadline() (inhibit and event timers);
 //   - pass received frames to on_frame() for RTRs (others are ignored).
 // Writes (set_value/set_values/set_raw) are events: with types 254/255 they
-// may send at once, from inside the call.
+// may send at once, from inside the call. They, add*(), reconfigure() and
+// on_sync() report the new deadline to the on_deadline_change() observer
+// (canopen/deadline.hpp).
 //
 // Thread safety: none; one thread. The sink is called synchronously and must
 // not call back into the transmitter.
@@ -36,6 +38,7 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
+#include "canopen/deadline.hpp"
 #include "canopen/events.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/pdo/mapping.hpp"
@@ -43,7 +46,7 @@
 
 namespace canopen::pdo {
 
-class PdoTransmitter {
+class PdoTransmitter : public DeadlineSource {
  public:
   using FrameSink = std::function<void(const can::Frame&)>;
 

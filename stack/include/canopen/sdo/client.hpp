@@ -6,8 +6,10 @@
 // client emits frames through the sink. The caller MUST
 //   - pass every received frame to on_frame() (frames that are not SDO
 //     responses of a node with a transfer in progress are ignored), and
-//   - call on_time(now) when now >= next_deadline(); next_deadline() can
-//     change after any call (upload, download, on_frame, ...), so re-read it.
+//   - call on_time(now) when now >= next_deadline(), re-reading it after
+//     its own on_frame() and on_time() calls. upload(), download() and
+//     cancel() report the new deadline to the on_deadline_change()
+//     observer (canopen/deadline.hpp).
 //
 // Modes (Mode):
 //   - Auto, download: expedited for 1..4 bytes; block for more than
@@ -106,6 +108,7 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
+#include "canopen/deadline.hpp"
 #include "canopen/result.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "canopen/sdo/protocol.hpp"
@@ -174,7 +177,7 @@ struct ClientConfig {
   Duration block_retry_interval = std::chrono::minutes(10);
 };
 
-class SdoClient {
+class SdoClient : public DeadlineSource {
  public:
   SdoClient(ClientConfig config, FrameSink sink);
 

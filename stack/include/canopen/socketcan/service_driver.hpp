@@ -6,8 +6,12 @@
 //   void on_frame(const can::Frame&, TimePoint now);
 //   void on_time(TimePoint now);
 //   TimePoint next_deadline() const;   // TimePoint::max() when idle
-// Callers that change a service from outside (e.g. submit an SDO request)
-// MUST call poke() afterwards so the timer follows the new deadline.
+// and, optionally, canopen::DeadlineSource's on_deadline_change(): such a
+// service reports itself when a call from outside (submit an SDO request,
+// raise an EMCY, start ...) moves its deadline, and the timer follows with
+// nothing more to do for the caller. Calls made while the driver feeds the
+// services (from their callbacks) need no report: the driver re-reads every
+// deadline after each batch, timer and local delivery.
 //
 // Thread safety: io_context thread only. Services must outlive the driver
 // or be removed first.
@@ -35,17 +39,20 @@ class ServiceDriver {
 
   template <typename Service>
   void add(Service& s) {
-    entries_.push_back(Entry{&s, [&s](const can::Frame& f, TimePoint now) { s.on_frame(f, now); },
-                             [&s](TimePoint now) { s.on_time(now); }, [&s] { return s.next_deadline(); }});
-    poke();
+    Entry e{&s, [&s](const can::Frame& f, TimePoint now) { s.on_frame(f, now); },
+            [&s](TimePoint now) { s.on_time(now); }, [&s] { return s.next_deadline(); }, nullptr};
+    if constexpr (requires { s.on_deadline_change(nullptr); }) {
+      s.on_deadline_change([this](TimePoint next) { deadline_moved(next); });
+      e.detach = [&s] { s.on_deadline_change(nullptr); };
+    }
+    entries_.push_back(std::move(e));
+    rearm();
   }
+  // The service is fed no more (and its deadline reports are no longer heard).
   void remove(const void* service);
 
   // Also called with every received batch, after the services (e.g. logging).
   void on_frames(can::Channel::FrameHandler tap) { tap_ = std::move(tap); }
-
-  // Re-arms the timer for the earliest deadline.
-  void poke();
 
   // A frame this process sent that its own services must also see, as if
   // received (a socket does not receive its own frames): e.g. an NMT
@@ -62,7 +69,13 @@ class ServiceDriver {
     std::function<void(const can::Frame&, TimePoint)> on_frame;
     std::function<void(TimePoint)> on_time;
     std::function<TimePoint()> next_deadline;
+    std::function<void()> detach;  // removes the deadline observer, if any
   };
+  // Arms the timer for the earliest deadline of all services.
+  void rearm();
+  // A service's report: earlier than the timer is armed for, it re-arms.
+  void deadline_moved(TimePoint next);
+  void arm(TimePoint at);
   void on_timer();
   void drain_local();
 
@@ -73,6 +86,7 @@ class ServiceDriver {
   TimePoint armed_for_ = TimePoint::max();
   std::vector<std::pair<can::Frame, const void*>> local_;
   bool drain_posted_ = false;
+  bool feeding_ = false;  // inside a batch, timer or local delivery: rearm() follows
   std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 

@@ -1,9 +1,9 @@
 // SYNC producer and consumer (CiA 301 7.2.5, objects 1005h-1007h, 1019h).
-#include "canopen/emcy/sync.hpp"
+#include "canopen/sync/sync.hpp"
 
 #include <utility>
 
-namespace canopen::emcy {
+namespace canopen::sync {
 
 SyncProducer::SyncProducer(const od::ObjectDictionary& dictionary, FrameSink sink, TimePoint now)
     : od_(dictionary), sink_(std::move(sink)) {
@@ -63,4 +63,4 @@ bool SyncConsumer::in_sync_window(TimePoint now) const {
   return now - *last_ < std::chrono::microseconds(static_cast<std::int64_t>(window_us));
 }
 
-}  // namespace canopen::emcy
+}  // namespace canopen::sync

@@ -48,7 +48,7 @@
 #include "canopen/sdo/client.hpp"
 #include "canopen/types.hpp"
 
-namespace canopen::nmt {
+namespace canopen::master {
 
 // Identity check failures (CiA 302-2 boot-up error codes in parentheses).
 enum class BootError : std::uint8_t {
@@ -169,7 +169,7 @@ class BootConfigurator {
   std::uint64_t generation_ = 0;
 };
 
-}  // namespace canopen::nmt
+}  // namespace canopen::master
 
 template <>
-struct std::is_error_code_enum<canopen::nmt::BootError> : std::true_type {};
+struct std::is_error_code_enum<canopen::master::BootError> : std::true_type {};

@@ -1,8 +1,8 @@
-#include "canopen/emcy/service.hpp"
+#include "canopen/cob_id.hpp"
 
 #include <algorithm>
 
-namespace canopen::emcy {
+namespace canopen {
 
 std::uint32_t can_id_of(std::uint32_t cob_id) {
   return (cob_id & kCobIdFrame) != 0 ? (cob_id & can::kMaxExtendedId) : (cob_id & can::kMaxStandardId);
@@ -22,4 +22,4 @@ can::Frame frame_for_cob_id(std::uint32_t cob_id, const std::uint8_t* bytes, std
   return f;
 }
 
-}  // namespace canopen::emcy
+}  // namespace canopen

@@ -1,16 +1,12 @@
-// Pieces shared by the EMCY, SYNC and TIME services (CiA 301 7.2.5-7.2.7).
+// COB-ID helpers shared by the EMCY, SYNC and TIME services (CiA 301
+// 7.2.5-7.2.7) and whoever reads their COB-ID entries (1005h, 1012h, 1014h).
 #pragma once
 
 #include <cstdint>
-#include <functional>
 
 #include "canopen/can/frame.hpp"
 
-namespace canopen::emcy {
-
-// Where a service emits its frames. Called synchronously from the service's
-// methods; it must not call back into the service that called it.
-using FrameSink = std::function<void(const can::Frame&)>;
+namespace canopen {
 
 // COB-ID bits shared by 1005h, 1012h, 1014h and 1028h.
 inline constexpr std::uint32_t kCobIdBit31 = 1U << 31;  // 1014h/1028h: invalid; 1012h: consume
@@ -24,4 +20,4 @@ bool matches_cob_id(const can::Frame& f, std::uint32_t cob_id);
 // A data frame with the identifier and format of `cob_id` carrying `bytes`.
 can::Frame frame_for_cob_id(std::uint32_t cob_id, const std::uint8_t* bytes, std::uint8_t len);
 
-}  // namespace canopen::emcy
+}  // namespace canopen

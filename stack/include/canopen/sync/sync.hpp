@@ -17,11 +17,16 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
-#include "canopen/emcy/service.hpp"
+#include "canopen/cob_id.hpp"
 #include "canopen/events.hpp"
 #include "canopen/od/object_dictionary.hpp"
 
-namespace canopen::emcy {
+namespace canopen::sync {
+
+// Where the service emits its frames. Called synchronously from the
+// service's methods; it must not call back into the service that called it.
+using FrameSink = std::function<void(const can::Frame&)>;
+
 
 // SYNC producer. Configuration from the dictionary: 1005h (COB-ID; bit 30
 // set = this device generates SYNC), 1006h (communication cycle period in
@@ -105,4 +110,4 @@ class SyncConsumer {
   std::uint64_t bad_length_ = 0;
 };
 
-}  // namespace canopen::emcy
+}  // namespace canopen::sync

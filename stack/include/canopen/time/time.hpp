@@ -21,12 +21,17 @@
 
 #include "canopen/can/frame.hpp"
 #include "canopen/clock.hpp"
-#include "canopen/emcy/service.hpp"
+#include "canopen/cob_id.hpp"
 #include "canopen/events.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/types.hpp"
 
-namespace canopen::emcy {
+namespace canopen::time {
+
+// Where the service emits its frames. Called synchronously from the
+// service's methods; it must not call back into the service that called it.
+using FrameSink = std::function<void(const can::Frame&)>;
+
 
 std::array<std::uint8_t, 6> encode_time_of_day(const TimeOfDay& t);
 // Bits 28..31 of the ms field are reserved and ignored.
@@ -79,4 +84,4 @@ class TimeConsumer {
   std::uint64_t malformed_ = 0;
 };
 
-}  // namespace canopen::emcy
+}  // namespace canopen::time

@@ -1,6 +1,6 @@
-// Tests for stack/src/emcy/sync.cpp: SYNC producer and consumer (CiA 301
+// Tests for stack/src/sync/sync.cpp: SYNC producer and consumer (CiA 301
 // 7.2.5, 1005h, 1006h, 1007h, 1019h), driven by FakeClock.
-#include "canopen/emcy/sync.hpp"
+#include "canopen/sync/sync.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +12,7 @@
 
 #include "canopen/od/gateway_dictionary.hpp"
 
-namespace canopen::emcy {
+namespace canopen::sync {
 namespace {
 
 using namespace std::chrono_literals;
@@ -233,4 +233,4 @@ TEST(SyncLoopback, Sync_1007h_ProducedSyncFedToConsumerOpensTheWindow) {
 }
 
 }  // namespace
-}  // namespace canopen::emcy
+}  // namespace canopen::sync

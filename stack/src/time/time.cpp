@@ -1,10 +1,10 @@
 // TIME producer and consumer (CiA 301 7.2.6, object 1012h; TIME_OF_DAY 7.1.6.5).
-#include "canopen/emcy/time.hpp"
+#include "canopen/time/time.hpp"
 
 #include <algorithm>
 #include <utility>
 
-namespace canopen::emcy {
+namespace canopen::time {
 namespace {
 
 constexpr std::uint32_t kMsMask = 0x0FFFFFFFU;  // 28 bits; the top 4 are reserved
@@ -71,4 +71,4 @@ bool TimeConsumer::on_frame(const can::Frame& frame, TimePoint /*now*/) {
   return true;
 }
 
-}  // namespace canopen::emcy
+}  // namespace canopen::time

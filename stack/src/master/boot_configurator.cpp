@@ -1,4 +1,4 @@
-#include "canopen/nmt/boot.hpp"
+#include "canopen/master/boot_configurator.hpp"
 
 #include <cstdio>
 #include <string>
@@ -6,7 +6,7 @@
 
 #include "canopen/sdo/abort.hpp"
 
-namespace canopen::nmt {
+namespace canopen::master {
 
 namespace {
 
@@ -368,4 +368,4 @@ void BootConfigurator::emit(std::uint8_t node, BootConfigEvent::Step s, std::str
   if (on_event_) on_event_(e);
 }
 
-}  // namespace canopen::nmt
+}  // namespace canopen::master

@@ -2,7 +2,7 @@
 // over the in-memory bus with a fake clock: NmtMaster + SdoClient +
 // BootConfigurator on one side, NmtSlave + SdoServer on the drive's EDS
 // dictionary on the other.
-#include "canopen/nmt/boot.hpp"
+#include "canopen/master/boot_configurator.hpp"
 
 #include <gtest/gtest.h>
 
@@ -24,11 +24,13 @@
 #include "canopen/sdo/client.hpp"
 #include "canopen/sdo/server.hpp"
 
-namespace canopen::nmt {
+namespace canopen::master {
 namespace {
 
 using namespace std::chrono_literals;
 using Step = BootConfigEvent::Step;
+using nmt::NmtMaster;
+using nmt::NmtSlave;
 
 constexpr std::uint8_t kNode = 5;
 constexpr std::uint32_t kSerial = 0x00012345;  // the DCF's LSS serial / 1018h sub 4
@@ -442,4 +444,4 @@ TEST(BootConfigPlan, StoreRestoreAndReadOnlyEntriesNeverWritten_HeartbeatAlways)
 }
 
 }  // namespace
-}  // namespace canopen::nmt
+}  // namespace canopen::master

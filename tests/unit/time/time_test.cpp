@@ -1,6 +1,6 @@
-// Tests for stack/src/emcy/time.cpp: TIME producer and consumer (CiA 301
+// Tests for stack/src/time/time.cpp: TIME producer and consumer (CiA 301
 // 7.2.6, 1012h, TIME_OF_DAY of 7.1.6.5).
-#include "canopen/emcy/time.hpp"
+#include "canopen/time/time.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 
 #include "canopen/od/gateway_dictionary.hpp"
 
-namespace canopen::emcy {
+namespace canopen::time {
 namespace {
 
 using namespace std::chrono_literals;
@@ -133,4 +133,4 @@ TEST_F(TimeTest, Time_7_2_6_ProducerAndConsumerRoundTrip) {
 }
 
 }  // namespace
-}  // namespace canopen::emcy
+}  // namespace canopen::time

@@ -1,0 +1,112 @@
+// One CAN network of the gateway as one unit: its channel, the gateway's
+// own CANopen device on it (canopen::LocalNode on the gateway dictionary),
+// the master-side services watching the other nodes (canopen::Network),
+// the ServiceDriver that feeds both from the channel and the io_context's
+// clock, the nodes' EDS/DCF descriptions, and for the simulated demo bus
+// the simulated devices. Built by the composition root (composition.hpp).
+//
+// The stack's services read no clock: what the unit hands them comes from
+// now(), the one place the unit reads it.
+//
+// Thread safety: io_context thread only. The unit MUST outlive nothing that
+// refers to it: App owns it and sets on_event/on_bus_event before start().
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <boost/asio/io_context.hpp>
+
+#include "canopen/can/bus_state.hpp"
+#include "canopen/can/channel.hpp"
+#include "canopen/clock.hpp"
+#include "canopen/eds/eds.hpp"
+#include "canopen/events.hpp"
+#include "canopen/local_node.hpp"
+#include "canopen/network.hpp"
+#include "canopen/od/object_dictionary.hpp"
+#include "canopen/socketcan/service_driver.hpp"
+#include "config.hpp"
+#include "log.hpp"
+#include "seq_store.hpp"
+
+namespace canopen::socketcan {
+class SocketCanChannel;
+}
+
+namespace canopen::sim {
+class AsioMemoryBus;
+class AsioMemoryChannel;
+class Simulator;
+}  // namespace canopen::sim
+
+namespace gateway {
+
+// A network's CAN side as the composition root opened it. The unit talks
+// to `channel` only, whatever it is; the rest keeps it alive and serves
+// the hooks of a simulated network (App::simulated_bus, simulator, ...).
+struct NetworkLink {
+  NetworkLink();
+  NetworkLink(NetworkLink&&) noexcept;
+  NetworkLink& operator=(NetworkLink&&) noexcept;
+  ~NetworkLink();
+
+  canopen::can::Channel* channel = nullptr;
+  // A real network: the SocketCAN channel.
+  std::shared_ptr<canopen::socketcan::SocketCanChannel> socket;
+  // A simulated one: the in-process bus, the gateway's and the devices'
+  // ends of it, and the simulated devices (destroyed in reverse order).
+  std::unique_ptr<canopen::sim::AsioMemoryBus> memory_bus;
+  std::unique_ptr<canopen::sim::AsioMemoryChannel> memory_gateway, memory_devices;
+  std::unique_ptr<canopen::sim::Simulator> simulator;
+};
+
+struct NetworkUnit {
+  // Builds the own dictionary from `cfg` (heartbeat, consumers, SYNC,
+  // TIME), the LocalNode and the Network with every node's watching, boot
+  // and PDO configuration, and binds them to link.channel. Throws
+  // ConfigError when a configured value does not fit the dictionary.
+  // `cfg.nodes` is the final node list (the demo's for a simulated bus);
+  // `descriptions` the nodes' EDS/DCF, by node-ID.
+  NetworkUnit(boost::asio::io_context& io, std::uint32_t number, NetworkConfig cfg,
+              std::map<std::uint8_t, canopen::eds::DeviceDescription> descriptions, NetworkLink link, Logger& log,
+              const std::string& config_source);
+  ~NetworkUnit();
+  NetworkUnit(const NetworkUnit&) = delete;
+  NetworkUnit& operator=(const NetworkUnit&) = delete;
+
+  // The time the unit gives the stack.
+  static canopen::TimePoint now() { return canopen::SteadyClock::now(); }
+
+  std::uint32_t number = 0;
+  NetworkConfig cfg;
+  std::string label;  // "net 1 vcan0"
+  Logger& log;
+  NetworkLink link;
+  canopen::can::Channel* channel = nullptr;  // link.channel
+  std::optional<canopen::od::ObjectDictionary> own_od;
+  std::unique_ptr<canopen::LocalNode> local;
+  // std::map: stable addresses (the boot configurator keeps DCF pointers).
+  std::map<std::uint8_t, canopen::eds::DeviceDescription> descriptions;
+  std::unique_ptr<canopen::Network> network;
+  std::unique_ptr<canopen::socketcan::ServiceDriver> driver;
+
+  // Every event of the network's stream, after the own node took what it
+  // needs of it (lost nodes: 8130h). Set by the App.
+  std::function<void(const canopen::Event&)> on_event;
+  // Every bus event of the channel, after the network reported it and the
+  // own node raised its EMCYs. Set by the App.
+  std::function<void(const canopen::can::BusEvent&)> on_bus_event;
+
+  // The App's state per network.
+  // Per node: when the last heartbeat went to MQTT (rate limit).
+  std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
+  std::optional<SeqStore> seq;  // the event sequence across restarts (from start())
+};
+
+}  // namespace gateway

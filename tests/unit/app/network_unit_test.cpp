@@ -1,0 +1,100 @@
+// NetworkUnit (gateway/app/network_unit.cpp): one network's channel, own
+// node (LocalNode), master side and driver wired together; here on the
+// simulated bus with its devices not started, a watcher on the bus.
+#include "network_unit.hpp"
+
+#include <gtest/gtest.h>
+
+#include <optional>
+#include <vector>
+
+#include "canopen/can/memory_bus.hpp"
+#include "composition.hpp"
+#include "sim/asio_memory_bus.hpp"
+
+namespace gateway {
+namespace {
+
+using namespace std::chrono_literals;
+
+struct UnitRig {
+  UnitRig() {
+    CliOptions cli;
+    cli.demo = true;
+    composition = compose_networks(io, merge(Config{}, cli), log);
+    unit = composition.units.at(0).get();
+    watcher = unit->link.memory_bus->bus().attach("watcher");
+    watcher->on_frames([this](std::span<const canopen::can::Frame> fs) { seen.insert(seen.end(), fs.begin(), fs.end()); });
+    unit->on_event = [this](const canopen::Event& ev) { events.push_back(ev); };
+  }
+  template <typename Pred>
+  bool run_until(Pred pred) {
+    const auto end = std::chrono::steady_clock::now() + 5s;
+    while (!pred() && std::chrono::steady_clock::now() < end) {
+      io.restart();
+      io.run_for(5ms);
+    }
+    return pred();
+  }
+  template <typename T>
+  const T* find_event() const {
+    for (const auto& ev : events)
+      if (const auto* b = std::get_if<T>(&ev.body)) return b;
+    return nullptr;
+  }
+
+  boost::asio::io_context io;
+  Logger log{LogLevel::Error};
+  Composition composition;
+  NetworkUnit* unit = nullptr;
+  std::unique_ptr<canopen::can::MemoryEndpoint> watcher;
+  std::vector<canopen::can::Frame> seen;
+  std::vector<canopen::Event> events;
+};
+
+TEST(NetworkUnit, TheSyncRequestGoesOutWith1005hAndTheMasterSideHearsIt) {
+  UnitRig r;
+  r.unit->local->start(NetworkUnit::now());
+  auto write_1005 = [&](std::uint32_t v) {
+    return r.unit->own_od->write(0x1005, 0, canopen::encode(canopen::Value::of_unsigned(canopen::DataType::Unsigned32, v)));
+  };
+  // 7.5.2.5: the CAN-ID changes only while the node does not generate SYNC.
+  ASSERT_FALSE(write_1005(0x80));
+  ASSERT_FALSE(write_1005(0x81));
+  r.unit->local->send_sync(3);
+  ASSERT_TRUE(r.run_until([&] { return r.find_event<canopen::SyncEvent>() != nullptr; }))
+      << "the master side's SYNC consumer (synchronous RPDOs) sees the gateway's own SYNC";
+  EXPECT_EQ(r.find_event<canopen::SyncEvent>()->counter, std::optional<std::uint8_t>(3));
+  ASSERT_TRUE(r.run_until([&] {
+    return std::any_of(r.seen.begin(), r.seen.end(), [](const auto& f) { return f.id == 0x81; });
+  })) << "on the bus with the COB-ID of 1005h (7.5.2.5)";
+}
+
+TEST(NetworkUnit, ALostGuardedNodeRaisesTheOwnNodes8130hWithoutAnyManualRearm) {
+  UnitRig r;
+  r.unit->local->start(NetworkUnit::now());
+  // Node 42 does not exist: guarding (7.2.8.3.2.1) loses it after 2 x 10 ms.
+  ASSERT_TRUE(r.unit->network->nmt().set_node_guarding(42, 10ms, 2, NetworkUnit::now()));
+  const std::uint32_t own_emcy = 0x80U + r.unit->cfg.node_id;
+  ASSERT_TRUE(r.run_until([&] {
+    return std::any_of(r.seen.begin(), r.seen.end(), [&](const auto& f) {
+      return f.id == own_emcy && f.data[0] == 0x30 && f.data[1] == 0x81;
+    });
+  })) << "8130h life guard error on the bus (7.2.7.1)";
+  ASSERT_TRUE(r.run_until([&] {
+    const auto* e = r.find_event<canopen::EmcyEvent>();
+    return e != nullptr && e->node == r.unit->cfg.node_id && e->error_code == canopen::kEmcyLifeGuardOrHeartbeat;
+  })) << "and in the network's stream, like any node's EMCY";
+}
+
+TEST(NetworkUnit, AnNmtCommandToAllNodesReachesTheOwnNode) {
+  UnitRig r;
+  r.unit->local->start(NetworkUnit::now());
+  ASSERT_EQ(r.unit->local->state(), canopen::NmtState::PreOperational);
+  r.unit->network->send_nmt(canopen::NmtCommand::Start, 0);
+  ASSERT_TRUE(r.run_until([&] { return r.unit->local->state() == canopen::NmtState::Operational; }))
+      << "7.2.8.3.1: node-ID 0 addresses every node, the gateway's own too";
+}
+
+}  // namespace
+}  // namespace gateway
