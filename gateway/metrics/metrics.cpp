@@ -1,5 +1,7 @@
 #include "metrics.hpp"
 
+#include "registry.hpp"
+
 #include <array>
 #include <charconv>
 #include <cstdio>
@@ -178,29 +180,37 @@ std::string TextWriter::str() const {
   return out;
 }
 
-std::string render_metrics(const MetricsSnapshot& s) {
-  constexpr auto C = MetricType::Counter;
-  constexpr auto G = MetricType::Gauge;
-  TextWriter w;
+// The gateway's families, registered per component from the snapshot; the
+// reads run at render() below, while `s` is alive.
+namespace {
 
-  if (!s.version.empty()) {
-    w.family("canopen_gateway_build_info", "Gateway build; the value is always 1.", G);
-    w.sample("canopen_gateway_build_info", {{"version", s.version}}, 1U);
-  }
+constexpr auto C = MetricType::Counter;
+constexpr auto G = MetricType::Gauge;
 
-  // Per CAN network.
-  const std::string frames = "canopen_gateway_can_frames_total";
-  const std::string dropped = "canopen_gateway_can_frames_dropped_total";
-  const std::string errors = "canopen_gateway_can_error_frames_total";
-  const std::string reopens = "canopen_gateway_can_reopens_total";
-  const std::string bus = "canopen_gateway_bus_state";
-  const std::string net_events = "canopen_gateway_network_events_total";
-  w.family(frames, "CAN frames received (rx) and sent (tx) per network.", C);
-  w.family(dropped, "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.", C);
-  w.family(errors, "CAN error frames received per network.", C);
-  w.family(reopens, "Times the CAN socket of a network was reopened after the link came back.", C);
-  w.family(bus, "CAN controller state per network: 1 for the current state, 0 for the others.", G);
-  w.family(net_events, "Events produced by each network.", C);
+// Channels (frames, drops, reopens, bus state) and the state cache's
+// per-network event counts.
+void register_networks(Registry& r, const MetricsSnapshot& s) {
+  static constexpr std::string_view frames = "canopen_gateway_can_frames_total";
+  static constexpr std::string_view dropped = "canopen_gateway_can_frames_dropped_total";
+  static constexpr std::string_view errors = "canopen_gateway_can_error_frames_total";
+  static constexpr std::string_view reopens = "canopen_gateway_can_reopens_total";
+  static constexpr std::string_view bus = "canopen_gateway_bus_state";
+  static constexpr std::string_view net_events = "canopen_gateway_network_events_total";
+  static constexpr std::string_view frames_help = "CAN frames received (rx) and sent (tx) per network.";
+  static constexpr std::string_view dropped_help =
+      "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.";
+  static constexpr std::string_view errors_help = "CAN error frames received per network.";
+  static constexpr std::string_view reopens_help =
+      "Times the CAN socket of a network was reopened after the link came back.";
+  static constexpr std::string_view bus_help =
+      "CAN controller state per network: 1 for the current state, 0 for the others.";
+  static constexpr std::string_view events_help = "Events produced by each network.";
+  r.family(frames, frames_help, C);
+  r.family(dropped, dropped_help, C);
+  r.family(errors, errors_help, C);
+  r.family(reopens, reopens_help, C);
+  r.family(bus, bus_help, G);
+  r.family(net_events, events_help, C);
   for (const auto& n : s.networks) {
     const std::string id = integer_text(n.network);
     auto labels = [&](std::string_view k, std::string_view v) {
@@ -208,132 +218,167 @@ std::string render_metrics(const MetricsSnapshot& s) {
       if (!k.empty()) l.emplace_back(std::string(k), std::string(v));
       return l;
     };
-    w.sample(frames, labels("direction", "rx"), n.rx_frames);
-    w.sample(frames, labels("direction", "tx"), n.tx_frames);
-    w.sample(dropped, labels("direction", "rx"), n.rx_dropped);
-    w.sample(dropped, labels("direction", "tx"), n.tx_dropped);
-    w.sample(errors, labels({}, {}), n.error_frames);
-    w.sample(reopens, labels({}, {}), n.reopens);
+    r.counter_fn(frames, frames_help, labels("direction", "rx"), [&n] { return Value(n.rx_frames); });
+    r.counter_fn(frames, frames_help, labels("direction", "tx"), [&n] { return Value(n.tx_frames); });
+    r.counter_fn(dropped, dropped_help, labels("direction", "rx"), [&n] { return Value(n.rx_dropped); });
+    r.counter_fn(dropped, dropped_help, labels("direction", "tx"), [&n] { return Value(n.tx_dropped); });
+    r.counter_fn(errors, errors_help, labels({}, {}), [&n] { return Value(n.error_frames); });
+    r.counter_fn(reopens, reopens_help, labels({}, {}), [&n] { return Value(n.reopens); });
     for (std::string_view state : kBusStates) {
-      w.sample(bus, labels("state", state), n.bus_state == state);
+      r.gauge_fn(bus, bus_help, labels("state", state), [&n, state] { return Value(n.bus_state == state); });
     }
-    w.sample(net_events, labels({}, {}), n.events);
+    r.counter_fn(net_events, events_help, labels({}, {}), [&n] { return Value(n.events); });
   }
+}
 
-  // CANopen services.
-  w.single("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", C, s.sdo_requests);
-  w.single("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", C, s.sdo_aborts);
-  w.single("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", C, s.sdo_timeouts);
-  w.single("canopen_gateway_nmt_commands_total", "NMT commands sent.", C, s.nmt_commands);
+// The request handler's CANopen services (SDO, NMT, refusals).
+void register_services(Registry& r, const MetricsSnapshot& s) {
+  r.counter_fn("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", {},
+               [&s] { return Value(s.sdo_requests); });
+  r.counter_fn("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", {},
+               [&s] { return Value(s.sdo_aborts); });
+  r.counter_fn("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", {},
+               [&s] { return Value(s.sdo_timeouts); });
+  r.counter_fn("canopen_gateway_nmt_commands_total", "NMT commands sent.", {}, [&s] { return Value(s.nmt_commands); });
   if (!s.sdo_latency_bounds.empty())
-    w.histogram("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
-                s.sdo_latency_bounds, s.sdo_latency_counts, s.sdo_latency_sum);
+    r.histogram_fn("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
+                   s.sdo_latency_bounds, [&s] { return HistogramValues{s.sdo_latency_counts, s.sdo_latency_sum}; });
   if (s.request_auth_failures)
-    w.single("canopen_gateway_request_auth_failures_total",
-             "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", C,
-             *s.request_auth_failures);
+    r.counter_fn("canopen_gateway_request_auth_failures_total",
+                 "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", {},
+                 [&s] { return Value(*s.request_auth_failures); });
   if (s.requests_over_sdo_share || s.mqtt_requests_rate_limited) {
-    const std::string limited = "canopen_gateway_requests_limited_total";
-    w.family(limited,
-             "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
-             "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).",
-             C);
-    if (s.requests_over_sdo_share) w.sample(limited, {{"reason", "sdo-queue-share"}}, *s.requests_over_sdo_share);
+    static constexpr std::string_view limited = "canopen_gateway_requests_limited_total";
+    static constexpr std::string_view help =
+        "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
+        "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).";
+    r.family(limited, help, C);
+    if (s.requests_over_sdo_share)
+      r.counter_fn(limited, help, {{"reason", "sdo-queue-share"}}, [&s] { return Value(*s.requests_over_sdo_share); });
     if (s.mqtt_requests_rate_limited)
-      w.sample(limited, {{"reason", "mqtt-rate-limit"}}, *s.mqtt_requests_rate_limited);
+      r.counter_fn(limited, help, {{"reason", "mqtt-rate-limit"}},
+                   [&s] { return Value(*s.mqtt_requests_rate_limited); });
   }
+}
 
-  const std::string events = "canopen_gateway_events_published_total";
-  w.family(events, "Events published to clients, by kind.", C);
-  for (const auto& [kind, n] : s.events_by_kind) w.sample(events, {{"kind", kind}}, n);
+// The event pipeline: events published, by kind.
+void register_pipeline(Registry& r, const MetricsSnapshot& s) {
+  r.collect("canopen_gateway_events_published_total", "Events published to clients, by kind.", C,
+            [&s](const Registry::Emit& emit) {
+              for (const auto& [kind, n] : s.events_by_kind) emit({{"kind", kind}}, n);
+            });
+}
 
-  // MQTT.
-  w.single("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", G, s.mqtt_enabled);
-  if (s.mqtt_enabled) {
-    w.single("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", G, s.mqtt_connected);
-    const std::string msgs = "canopen_gateway_mqtt_messages_total";
-    w.family(msgs, "MQTT messages by result: published (handed to the broker), acked, dropped.", C);
-    w.sample(msgs, {{"result", "published"}}, s.mqtt_published);
-    w.sample(msgs, {{"result", "acked"}}, s.mqtt_acked);
-    w.sample(msgs, {{"result", "dropped"}}, s.mqtt_dropped);
-    w.single("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", G, s.mqtt_queue_depth);
-    w.single("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", G,
-             s.mqtt_queue_bytes);
-    w.single("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", C, s.mqtt_reconnects);
-    w.single("canopen_gateway_mqtt_requests_refused_total",
-             "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
-             "correlation data over 1 KiB.",
-             C, s.mqtt_requests_refused);
-    const std::string mqtt_dropped = "canopen_gateway_mqtt_dropped_total";
-    w.family(mqtt_dropped,
-             "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
-             "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
-             C);
-    for (const auto& [reason, n] : s.mqtt_dropped_by_reason) w.sample(mqtt_dropped, {{"reason", reason}}, n);
-    w.single("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
-             G, s.mqtt_memory_depth);
-    w.single("canopen_gateway_mqtt_spilled_total",
-             "MQTT messages of outage kinds written to disk because the broker was away or memory full.", C,
-             s.mqtt_spilled);
-    w.single("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", C,
-             s.mqtt_storage_bytes);
-    w.single("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", C,
-             s.mqtt_storage_syncs);
-    w.single("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
-             C, s.mqtt_storage_errors);
-    w.single("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", G,
-             s.mqtt_storage_failing);
-    w.single("canopen_gateway_mqtt_queue_corrupt_records_total",
-             "MQTT queue records lost to corruption, found when the queue was opened.", C, s.mqtt_corrupt_records);
-    w.single("canopen_gateway_mqtt_queue_corrupt_bytes_total",
-             "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", C,
-             s.mqtt_corrupt_bytes);
-    w.single("canopen_gateway_mqtt_stalls_total",
-             "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
-             "flight).",
-             C, s.mqtt_stalls);
-  }
+// The MQTT publisher and its queue.
+void register_mqtt(Registry& r, const MetricsSnapshot& s) {
+  r.gauge_fn("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", {},
+             [&s] { return Value(s.mqtt_enabled); });
+  if (!s.mqtt_enabled) return;
+  r.gauge_fn("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", {},
+             [&s] { return Value(s.mqtt_connected); });
+  static constexpr std::string_view msgs = "canopen_gateway_mqtt_messages_total";
+  static constexpr std::string_view msgs_help =
+      "MQTT messages by result: published (handed to the broker), acked, dropped.";
+  r.counter_fn(msgs, msgs_help, {{"result", "published"}}, [&s] { return Value(s.mqtt_published); });
+  r.counter_fn(msgs, msgs_help, {{"result", "acked"}}, [&s] { return Value(s.mqtt_acked); });
+  r.counter_fn(msgs, msgs_help, {{"result", "dropped"}}, [&s] { return Value(s.mqtt_dropped); });
+  r.gauge_fn("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", {},
+             [&s] { return Value(s.mqtt_queue_depth); });
+  r.gauge_fn("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", {},
+             [&s] { return Value(s.mqtt_queue_bytes); });
+  r.counter_fn("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", {},
+               [&s] { return Value(s.mqtt_reconnects); });
+  r.counter_fn("canopen_gateway_mqtt_requests_refused_total",
+               "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
+               "correlation data over 1 KiB.",
+               {}, [&s] { return Value(s.mqtt_requests_refused); });
+  r.collect("canopen_gateway_mqtt_dropped_total",
+            "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
+            "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
+            C, [&s](const Registry::Emit& emit) {
+              for (const auto& [reason, n] : s.mqtt_dropped_by_reason) emit({{"reason", reason}}, n);
+            });
+  r.gauge_fn("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
+             {}, [&s] { return Value(s.mqtt_memory_depth); });
+  r.counter_fn("canopen_gateway_mqtt_spilled_total",
+               "MQTT messages of outage kinds written to disk because the broker was away or memory full.", {},
+               [&s] { return Value(s.mqtt_spilled); });
+  r.counter_fn("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", {},
+               [&s] { return Value(s.mqtt_storage_bytes); });
+  r.counter_fn("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", {},
+               [&s] { return Value(s.mqtt_storage_syncs); });
+  r.counter_fn("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
+               {}, [&s] { return Value(s.mqtt_storage_errors); });
+  r.gauge_fn("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", {},
+             [&s] { return Value(s.mqtt_storage_failing); });
+  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_records_total",
+               "MQTT queue records lost to corruption, found when the queue was opened.", {},
+               [&s] { return Value(s.mqtt_corrupt_records); });
+  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_bytes_total",
+               "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", {},
+               [&s] { return Value(s.mqtt_corrupt_bytes); });
+  r.counter_fn("canopen_gateway_mqtt_stalls_total",
+               "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
+               "flight).",
+               {}, [&s] { return Value(s.mqtt_stalls); });
+}
 
-  // WebSocket and HTTP.
-  w.single("canopen_gateway_websocket_clients", "Connected WebSocket clients.", G, s.ws_clients);
-  const std::string ws = "canopen_gateway_websocket_messages_total";
-  w.family(ws, "WebSocket messages by result: sent, or dropped for a slow client.", C);
-  w.sample(ws, {{"result", "sent"}}, s.ws_messages_sent);
-  w.sample(ws, {{"result", "dropped"}}, s.ws_messages_dropped);
+// The HTTP server: WebSocket hub, responses, connection handling.
+void register_http(Registry& r, const MetricsSnapshot& s) {
+  r.gauge_fn("canopen_gateway_websocket_clients", "Connected WebSocket clients.", {},
+             [&s] { return Value(s.ws_clients); });
+  static constexpr std::string_view ws = "canopen_gateway_websocket_messages_total";
+  static constexpr std::string_view ws_help = "WebSocket messages by result: sent, or dropped for a slow client.";
+  r.counter_fn(ws, ws_help, {{"result", "sent"}}, [&s] { return Value(s.ws_messages_sent); });
+  r.counter_fn(ws, ws_help, {{"result", "dropped"}}, [&s] { return Value(s.ws_messages_dropped); });
+  r.collect("canopen_gateway_http_responses_total", "HTTP responses by status code.", C,
+            [&s](const Registry::Emit& emit) {
+              for (const auto& [code, n] : s.http_responses_by_status) emit({{"code", integer_text(code)}}, n);
+            });
+  if (!s.http_connections) return;
+  const HttpConnectionMetrics& hc = *s.http_connections;
+  static constexpr std::string_view conns = "canopen_gateway_http_connections";
+  static constexpr std::string_view conns_help =
+      "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.";
+  r.gauge_fn(conns, conns_help, {{"state", "open"}}, [&hc] { return Value(hc.open); });
+  r.gauge_fn(conns, conns_help, {{"state", "idle"}}, [&hc] { return Value(hc.idle); });
+  static constexpr std::string_view refused = "canopen_gateway_http_connections_refused_total";
+  static constexpr std::string_view refused_help =
+      "New connections closed at once: their client address had http.max-connections-per-address open "
+      "(per-address), or http.max-connections were open and none idle (full).";
+  r.counter_fn(refused, refused_help, {{"reason", "per-address"}}, [&hc] { return Value(hc.refused_per_address); });
+  r.counter_fn(refused, refused_help, {{"reason", "full"}}, [&hc] { return Value(hc.refused_full); });
+  r.counter_fn("canopen_gateway_http_connections_evicted_total",
+               "Idle connections closed to admit a new one at http.max-connections.", {},
+               [&hc] { return Value(hc.evicted_idle); });
+  r.counter_fn("canopen_gateway_http_header_timeouts_total",
+               "Connections closed because a request header did not arrive in time (slow clients).", {},
+               [&hc] { return Value(hc.header_timeouts); });
+  static constexpr std::string_view req = "canopen_gateway_http_requests_refused_total";
+  static constexpr std::string_view req_help =
+      "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
+      "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).";
+  r.counter_fn(req, req_help, {{"reason", "framing"}}, [&hc] { return Value(hc.refused_framing); });
+  r.counter_fn(req, req_help, {{"reason", "host"}}, [&hc] { return Value(hc.refused_host); });
+  r.counter_fn(req, req_help, {{"reason", "origin"}}, [&hc] { return Value(hc.refused_origin); });
+  r.counter_fn(req, req_help, {{"reason", "media-type"}}, [&hc] { return Value(hc.refused_media_type); });
+}
 
-  const std::string http = "canopen_gateway_http_responses_total";
-  w.family(http, "HTTP responses by status code.", C);
-  for (const auto& [code, n] : s.http_responses_by_status) w.sample(http, {{"code", integer_text(code)}}, n);
-  if (const auto& hc = s.http_connections) {
-    const std::string conns = "canopen_gateway_http_connections";
-    w.family(conns, "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.", G);
-    w.sample(conns, {{"state", "open"}}, hc->open);
-    w.sample(conns, {{"state", "idle"}}, hc->idle);
-    const std::string refused = "canopen_gateway_http_connections_refused_total";
-    w.family(refused,
-             "New connections closed at once: their client address had http.max-connections-per-address open "
-             "(per-address), or http.max-connections were open and none idle (full).",
-             C);
-    w.sample(refused, {{"reason", "per-address"}}, hc->refused_per_address);
-    w.sample(refused, {{"reason", "full"}}, hc->refused_full);
-    w.single("canopen_gateway_http_connections_evicted_total",
-             "Idle connections closed to admit a new one at http.max-connections.", C, hc->evicted_idle);
-    w.single("canopen_gateway_http_header_timeouts_total",
-             "Connections closed because a request header did not arrive in time (slow clients).", C,
-             hc->header_timeouts);
-    const std::string req = "canopen_gateway_http_requests_refused_total";
-    w.family(req,
-             "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
-             "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).",
-             C);
-    w.sample(req, {{"reason", "framing"}}, hc->refused_framing);
-    w.sample(req, {{"reason", "host"}}, hc->refused_host);
-    w.sample(req, {{"reason", "origin"}}, hc->refused_origin);
-    w.sample(req, {{"reason", "media-type"}}, hc->refused_media_type);
-  }
+}  // namespace
 
-  w.single("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", G, s.uptime_seconds);
-  return w.str();
+std::string render_metrics(const MetricsSnapshot& s) {
+  Registry r;
+  if (!s.version.empty())
+    r.gauge_fn("canopen_gateway_build_info", "Gateway build; the value is always 1.", {{"version", s.version}},
+               [] { return Value(1U); });
+  register_networks(r, s);
+  register_services(r, s);
+  register_pipeline(r, s);
+  register_mqtt(r, s);
+  register_http(r, s);
+  r.gauge_fn("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", {},
+             [&s] { return Value(s.uptime_seconds); });
+  return r.render();
 }
 
 }  // namespace gateway::metrics
