@@ -187,50 +187,6 @@ namespace {
 constexpr auto C = MetricType::Counter;
 constexpr auto G = MetricType::Gauge;
 
-// Channels (frames, drops, reopens, bus state) and the state cache's
-// per-network event counts.
-void register_networks(Registry& r, const MetricsSnapshot& s) {
-  static constexpr std::string_view frames = "canopen_gateway_can_frames_total";
-  static constexpr std::string_view dropped = "canopen_gateway_can_frames_dropped_total";
-  static constexpr std::string_view errors = "canopen_gateway_can_error_frames_total";
-  static constexpr std::string_view reopens = "canopen_gateway_can_reopens_total";
-  static constexpr std::string_view bus = "canopen_gateway_bus_state";
-  static constexpr std::string_view net_events = "canopen_gateway_network_events_total";
-  static constexpr std::string_view frames_help = "CAN frames received (rx) and sent (tx) per network.";
-  static constexpr std::string_view dropped_help =
-      "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.";
-  static constexpr std::string_view errors_help = "CAN error frames received per network.";
-  static constexpr std::string_view reopens_help =
-      "Times the CAN socket of a network was reopened after the link came back.";
-  static constexpr std::string_view bus_help =
-      "CAN controller state per network: 1 for the current state, 0 for the others.";
-  static constexpr std::string_view events_help = "Events produced by each network.";
-  r.family(frames, frames_help, C);
-  r.family(dropped, dropped_help, C);
-  r.family(errors, errors_help, C);
-  r.family(reopens, reopens_help, C);
-  r.family(bus, bus_help, G);
-  r.family(net_events, events_help, C);
-  for (const auto& n : s.networks) {
-    const std::string id = integer_text(n.network);
-    auto labels = [&](std::string_view k, std::string_view v) {
-      Labels l{{"network", id}, {"interface", n.interface}};
-      if (!k.empty()) l.emplace_back(std::string(k), std::string(v));
-      return l;
-    };
-    r.counter_fn(frames, frames_help, labels("direction", "rx"), [&n] { return Value(n.rx_frames); });
-    r.counter_fn(frames, frames_help, labels("direction", "tx"), [&n] { return Value(n.tx_frames); });
-    r.counter_fn(dropped, dropped_help, labels("direction", "rx"), [&n] { return Value(n.rx_dropped); });
-    r.counter_fn(dropped, dropped_help, labels("direction", "tx"), [&n] { return Value(n.tx_dropped); });
-    r.counter_fn(errors, errors_help, labels({}, {}), [&n] { return Value(n.error_frames); });
-    r.counter_fn(reopens, reopens_help, labels({}, {}), [&n] { return Value(n.reopens); });
-    for (std::string_view state : kBusStates) {
-      r.gauge_fn(bus, bus_help, labels("state", state), [&n, state] { return Value(n.bus_state == state); });
-    }
-    r.counter_fn(net_events, events_help, labels({}, {}), [&n] { return Value(n.events); });
-  }
-}
-
 // The request handler's CANopen services (SDO, NMT, refusals).
 void register_services(Registry& r, const MetricsSnapshot& s) {
   r.counter_fn("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", {},
@@ -259,14 +215,6 @@ void register_services(Registry& r, const MetricsSnapshot& s) {
       r.counter_fn(limited, help, {{"reason", "mqtt-rate-limit"}},
                    [&s] { return Value(*s.mqtt_requests_rate_limited); });
   }
-}
-
-// The event pipeline: events published, by kind.
-void register_pipeline(Registry& r, const MetricsSnapshot& s) {
-  r.collect("canopen_gateway_events_published_total", "Events published to clients, by kind.", C,
-            [&s](const Registry::Emit& emit) {
-              for (const auto& [kind, n] : s.events_by_kind) emit({{"kind", kind}}, n);
-            });
 }
 
 // The MQTT publisher and its queue.
@@ -323,62 +271,134 @@ void register_mqtt(Registry& r, const MetricsSnapshot& s) {
                {}, [&s] { return Value(s.mqtt_stalls); });
 }
 
-// The HTTP server: WebSocket hub, responses, connection handling.
-void register_http(Registry& r, const MetricsSnapshot& s) {
-  r.gauge_fn("canopen_gateway_websocket_clients", "Connected WebSocket clients.", {},
-             [&s] { return Value(s.ws_clients); });
-  static constexpr std::string_view ws = "canopen_gateway_websocket_messages_total";
-  static constexpr std::string_view ws_help = "WebSocket messages by result: sent, or dropped for a slow client.";
-  r.counter_fn(ws, ws_help, {{"result", "sent"}}, [&s] { return Value(s.ws_messages_sent); });
-  r.counter_fn(ws, ws_help, {{"result", "dropped"}}, [&s] { return Value(s.ws_messages_dropped); });
-  r.collect("canopen_gateway_http_responses_total", "HTTP responses by status code.", C,
-            [&s](const Registry::Emit& emit) {
-              for (const auto& [code, n] : s.http_responses_by_status) emit({{"code", integer_text(code)}}, n);
-            });
-  if (!s.http_connections) return;
-  const HttpConnectionMetrics& hc = *s.http_connections;
-  static constexpr std::string_view conns = "canopen_gateway_http_connections";
-  static constexpr std::string_view conns_help =
-      "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.";
-  r.gauge_fn(conns, conns_help, {{"state", "open"}}, [&hc] { return Value(hc.open); });
-  r.gauge_fn(conns, conns_help, {{"state", "idle"}}, [&hc] { return Value(hc.idle); });
-  static constexpr std::string_view refused = "canopen_gateway_http_connections_refused_total";
-  static constexpr std::string_view refused_help =
-      "New connections closed at once: their client address had http.max-connections-per-address open "
-      "(per-address), or http.max-connections were open and none idle (full).";
-  r.counter_fn(refused, refused_help, {{"reason", "per-address"}}, [&hc] { return Value(hc.refused_per_address); });
-  r.counter_fn(refused, refused_help, {{"reason", "full"}}, [&hc] { return Value(hc.refused_full); });
-  r.counter_fn("canopen_gateway_http_connections_evicted_total",
-               "Idle connections closed to admit a new one at http.max-connections.", {},
-               [&hc] { return Value(hc.evicted_idle); });
-  r.counter_fn("canopen_gateway_http_header_timeouts_total",
-               "Connections closed because a request header did not arrive in time (slow clients).", {},
-               [&hc] { return Value(hc.header_timeouts); });
-  static constexpr std::string_view req = "canopen_gateway_http_requests_refused_total";
-  static constexpr std::string_view req_help =
-      "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
-      "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).";
-  r.counter_fn(req, req_help, {{"reason", "framing"}}, [&hc] { return Value(hc.refused_framing); });
-  r.counter_fn(req, req_help, {{"reason", "host"}}, [&hc] { return Value(hc.refused_host); });
-  r.counter_fn(req, req_help, {{"reason", "origin"}}, [&hc] { return Value(hc.refused_origin); });
-  r.counter_fn(req, req_help, {{"reason", "media-type"}}, [&hc] { return Value(hc.refused_media_type); });
-}
-
 }  // namespace
 
 std::string render_metrics(const MetricsSnapshot& s) {
   Registry r;
-  if (!s.version.empty())
-    r.gauge_fn("canopen_gateway_build_info", "Gateway build; the value is always 1.", {{"version", s.version}},
-               [] { return Value(1U); });
-  register_networks(r, s);
+  if (!s.version.empty()) register_build_info(r, s.version);
+  register_network_families(r);
+  for (const auto& n : s.networks) register_network(r, [&n] { return n; });
   register_services(r, s);
-  register_pipeline(r, s);
+  register_events_by_kind(r, [&s] { return s.events_by_kind; });
   register_mqtt(r, s);
-  register_http(r, s);
-  r.gauge_fn("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", {},
-             [&s] { return Value(s.uptime_seconds); });
+  register_http_server(
+      r,
+      [&s] {
+        HttpServerMetrics m{s.ws_clients, s.ws_messages_sent, s.ws_messages_dropped, s.http_responses_by_status, {}};
+        if (s.http_connections) m.connections = *s.http_connections;
+        return m;
+      },
+      s.http_connections.has_value());
+  register_uptime(r, [&s] { return s.uptime_seconds; });
   return r.render();
+}
+
+
+namespace {
+constexpr std::string_view kFrames = "canopen_gateway_can_frames_total";
+constexpr std::string_view kDropped = "canopen_gateway_can_frames_dropped_total";
+constexpr std::string_view kErrors = "canopen_gateway_can_error_frames_total";
+constexpr std::string_view kReopens = "canopen_gateway_can_reopens_total";
+constexpr std::string_view kBus = "canopen_gateway_bus_state";
+constexpr std::string_view kNetEvents = "canopen_gateway_network_events_total";
+constexpr std::string_view kFramesHelp = "CAN frames received (rx) and sent (tx) per network.";
+constexpr std::string_view kDroppedHelp =
+    "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.";
+constexpr std::string_view kErrorsHelp = "CAN error frames received per network.";
+constexpr std::string_view kReopensHelp = "Times the CAN socket of a network was reopened after the link came back.";
+constexpr std::string_view kBusHelp = "CAN controller state per network: 1 for the current state, 0 for the others.";
+constexpr std::string_view kNetEventsHelp = "Events produced by each network.";
+}  // namespace
+
+void register_build_info(Registry& r, const std::string& version) {
+  r.gauge_fn("canopen_gateway_build_info", "Gateway build; the value is always 1.", {{"version", version}},
+             [] { return Value(1U); });
+}
+
+void register_network_families(Registry& r) {
+  r.family(kFrames, kFramesHelp, MetricType::Counter);
+  r.family(kDropped, kDroppedHelp, MetricType::Counter);
+  r.family(kErrors, kErrorsHelp, MetricType::Counter);
+  r.family(kReopens, kReopensHelp, MetricType::Counter);
+  r.family(kBus, kBusHelp, MetricType::Gauge);
+  r.family(kNetEvents, kNetEventsHelp, MetricType::Counter);
+}
+
+void register_network(Registry& r, const std::function<NetworkMetrics()>& read) {
+  const NetworkMetrics now = read();
+  const std::string id = integer_text(now.network);
+  auto labels = [&](std::string_view k, std::string_view v) {
+    Labels l{{"network", id}, {"interface", now.interface}};
+    if (!k.empty()) l.emplace_back(std::string(k), std::string(v));
+    return l;
+  };
+  auto field = [&read](std::uint64_t NetworkMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  r.counter_fn(kFrames, kFramesHelp, labels("direction", "rx"), field(&NetworkMetrics::rx_frames));
+  r.counter_fn(kFrames, kFramesHelp, labels("direction", "tx"), field(&NetworkMetrics::tx_frames));
+  r.counter_fn(kDropped, kDroppedHelp, labels("direction", "rx"), field(&NetworkMetrics::rx_dropped));
+  r.counter_fn(kDropped, kDroppedHelp, labels("direction", "tx"), field(&NetworkMetrics::tx_dropped));
+  r.counter_fn(kErrors, kErrorsHelp, labels({}, {}), field(&NetworkMetrics::error_frames));
+  r.counter_fn(kReopens, kReopensHelp, labels({}, {}), field(&NetworkMetrics::reopens));
+  for (std::string_view state : kBusStates) {
+    r.gauge_fn(kBus, kBusHelp, labels("state", state), [read, state] { return Value(read().bus_state == state); });
+  }
+  r.counter_fn(kNetEvents, kNetEventsHelp, labels({}, {}), field(&NetworkMetrics::events));
+}
+
+void register_events_by_kind(Registry& r, std::function<std::map<std::string, std::uint64_t>()> read) {
+  r.collect("canopen_gateway_events_published_total", "Events published to clients, by kind.", MetricType::Counter,
+            [read = std::move(read)](const Registry::Emit& emit) {
+              for (const auto& [kind, n] : read()) emit({{"kind", kind}}, n);
+            });
+}
+
+void register_uptime(Registry& r, std::function<double()> seconds) {
+  r.gauge_fn("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", {},
+             [seconds = std::move(seconds)] { return Value(seconds()); });
+}
+
+// The HTTP server: WebSocket hub, responses, connection handling.
+void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, bool with_connections) {
+  auto field = [&read](auto HttpServerMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  auto conn = [&read](std::uint64_t HttpConnectionMetrics::*f) {
+    return [read, f] { return Value(read().connections.*f); };
+  };
+  r.gauge_fn("canopen_gateway_websocket_clients", "Connected WebSocket clients.", {},
+             field(&HttpServerMetrics::ws_clients));
+  static constexpr std::string_view ws = "canopen_gateway_websocket_messages_total";
+  static constexpr std::string_view ws_help = "WebSocket messages by result: sent, or dropped for a slow client.";
+  r.counter_fn(ws, ws_help, {{"result", "sent"}}, field(&HttpServerMetrics::ws_messages_sent));
+  r.counter_fn(ws, ws_help, {{"result", "dropped"}}, field(&HttpServerMetrics::ws_messages_dropped));
+  r.collect("canopen_gateway_http_responses_total", "HTTP responses by status code.", MetricType::Counter,
+            [read](const Registry::Emit& emit) {
+              for (const auto& [code, n] : read().responses_by_status) emit({{"code", integer_text(code)}}, n);
+            });
+  if (!with_connections) return;
+  static constexpr std::string_view conns = "canopen_gateway_http_connections";
+  static constexpr std::string_view conns_help =
+      "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.";
+  r.gauge_fn(conns, conns_help, {{"state", "open"}}, conn(&HttpConnectionMetrics::open));
+  r.gauge_fn(conns, conns_help, {{"state", "idle"}}, conn(&HttpConnectionMetrics::idle));
+  static constexpr std::string_view refused = "canopen_gateway_http_connections_refused_total";
+  static constexpr std::string_view refused_help =
+      "New connections closed at once: their client address had http.max-connections-per-address open "
+      "(per-address), or http.max-connections were open and none idle (full).";
+  r.counter_fn(refused, refused_help, {{"reason", "per-address"}}, conn(&HttpConnectionMetrics::refused_per_address));
+  r.counter_fn(refused, refused_help, {{"reason", "full"}}, conn(&HttpConnectionMetrics::refused_full));
+  r.counter_fn("canopen_gateway_http_connections_evicted_total",
+               "Idle connections closed to admit a new one at http.max-connections.", {},
+               conn(&HttpConnectionMetrics::evicted_idle));
+  r.counter_fn("canopen_gateway_http_header_timeouts_total",
+               "Connections closed because a request header did not arrive in time (slow clients).", {},
+               conn(&HttpConnectionMetrics::header_timeouts));
+  static constexpr std::string_view req = "canopen_gateway_http_requests_refused_total";
+  static constexpr std::string_view req_help =
+      "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
+      "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).";
+  r.counter_fn(req, req_help, {{"reason", "framing"}}, conn(&HttpConnectionMetrics::refused_framing));
+  r.counter_fn(req, req_help, {{"reason", "host"}}, conn(&HttpConnectionMetrics::refused_host));
+  r.counter_fn(req, req_help, {{"reason", "origin"}}, conn(&HttpConnectionMetrics::refused_origin));
+  r.counter_fn(req, req_help, {{"reason", "media-type"}}, conn(&HttpConnectionMetrics::refused_media_type));
 }
 
 }  // namespace gateway::metrics

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -153,7 +154,38 @@ struct MetricsSnapshot {
 };
 
 // The whole /metrics body. Family order is fixed; series within a family
-// follow the snapshot's order (networks) or key order (maps).
+// follow the snapshot's order (networks) or key order (maps). Built on the
+// registry with the register_* functions below, reading the snapshot.
 std::string render_metrics(const MetricsSnapshot& s);
+
+// ---- Registration per component (registry.hpp) ----------------------------
+// Each registers its families once, with the names, help and labels above;
+// `read` runs at every render() and MUST stay valid as long as the registry
+// renders. Today's /metrics order results from registering in the order
+// render_metrics() does: build info, network families, networks, services
+// (request core), events, MQTT, HTTP, uptime.
+
+class Registry;
+
+void register_build_info(Registry& r, const std::string& version);
+// The per-network families (frames, drops, error frames, reopens, bus
+// state, events), written even while no network is registered.
+void register_network_families(Registry& r);
+// One network: its channel's counters and bus state, the state cache's
+// event count. Labels network/interface are taken from read() now.
+void register_network(Registry& r, const std::function<NetworkMetrics()>& read);
+// The event pipeline: events published, by kind ("tpdo" -> n).
+void register_events_by_kind(Registry& r, std::function<std::map<std::string, std::uint64_t>()> read);
+
+// The HTTP server (HttpStats, as http_metrics.hpp fills it).
+struct HttpServerMetrics {
+  std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
+  std::map<int, std::uint64_t> responses_by_status;  // 200 -> n
+  HttpConnectionMetrics connections;
+};
+// with_connections false: no connection families (a snapshot without them).
+void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, bool with_connections = true);
+
+void register_uptime(Registry& r, std::function<double()> seconds);
 
 }  // namespace gateway::metrics
