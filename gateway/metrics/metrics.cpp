@@ -182,105 +182,31 @@ std::string TextWriter::str() const {
 
 // The gateway's families, registered per component from the snapshot; the
 // reads run at render() below, while `s` is alive.
-namespace {
-
-constexpr auto C = MetricType::Counter;
-constexpr auto G = MetricType::Gauge;
-
-// The request handler's CANopen services (SDO, NMT, refusals).
-void register_services(Registry& r, const MetricsSnapshot& s) {
-  r.counter_fn("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", {},
-               [&s] { return Value(s.sdo_requests); });
-  r.counter_fn("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", {},
-               [&s] { return Value(s.sdo_aborts); });
-  r.counter_fn("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", {},
-               [&s] { return Value(s.sdo_timeouts); });
-  r.counter_fn("canopen_gateway_nmt_commands_total", "NMT commands sent.", {}, [&s] { return Value(s.nmt_commands); });
-  if (!s.sdo_latency_bounds.empty())
-    r.histogram_fn("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
-                   s.sdo_latency_bounds, [&s] { return HistogramValues{s.sdo_latency_counts, s.sdo_latency_sum}; });
-  if (s.request_auth_failures)
-    r.counter_fn("canopen_gateway_request_auth_failures_total",
-                 "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", {},
-                 [&s] { return Value(*s.request_auth_failures); });
-  if (s.requests_over_sdo_share || s.mqtt_requests_rate_limited) {
-    static constexpr std::string_view limited = "canopen_gateway_requests_limited_total";
-    static constexpr std::string_view help =
-        "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
-        "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).";
-    r.family(limited, help, C);
-    if (s.requests_over_sdo_share)
-      r.counter_fn(limited, help, {{"reason", "sdo-queue-share"}}, [&s] { return Value(*s.requests_over_sdo_share); });
-    if (s.mqtt_requests_rate_limited)
-      r.counter_fn(limited, help, {{"reason", "mqtt-rate-limit"}},
-                   [&s] { return Value(*s.mqtt_requests_rate_limited); });
-  }
-}
-
-// The MQTT publisher and its queue.
-void register_mqtt(Registry& r, const MetricsSnapshot& s) {
-  r.gauge_fn("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", {},
-             [&s] { return Value(s.mqtt_enabled); });
-  if (!s.mqtt_enabled) return;
-  r.gauge_fn("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", {},
-             [&s] { return Value(s.mqtt_connected); });
-  static constexpr std::string_view msgs = "canopen_gateway_mqtt_messages_total";
-  static constexpr std::string_view msgs_help =
-      "MQTT messages by result: published (handed to the broker), acked, dropped.";
-  r.counter_fn(msgs, msgs_help, {{"result", "published"}}, [&s] { return Value(s.mqtt_published); });
-  r.counter_fn(msgs, msgs_help, {{"result", "acked"}}, [&s] { return Value(s.mqtt_acked); });
-  r.counter_fn(msgs, msgs_help, {{"result", "dropped"}}, [&s] { return Value(s.mqtt_dropped); });
-  r.gauge_fn("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", {},
-             [&s] { return Value(s.mqtt_queue_depth); });
-  r.gauge_fn("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", {},
-             [&s] { return Value(s.mqtt_queue_bytes); });
-  r.counter_fn("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", {},
-               [&s] { return Value(s.mqtt_reconnects); });
-  r.counter_fn("canopen_gateway_mqtt_requests_refused_total",
-               "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
-               "correlation data over 1 KiB.",
-               {}, [&s] { return Value(s.mqtt_requests_refused); });
-  r.collect("canopen_gateway_mqtt_dropped_total",
-            "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
-            "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
-            C, [&s](const Registry::Emit& emit) {
-              for (const auto& [reason, n] : s.mqtt_dropped_by_reason) emit({{"reason", reason}}, n);
-            });
-  r.gauge_fn("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
-             {}, [&s] { return Value(s.mqtt_memory_depth); });
-  r.counter_fn("canopen_gateway_mqtt_spilled_total",
-               "MQTT messages of outage kinds written to disk because the broker was away or memory full.", {},
-               [&s] { return Value(s.mqtt_spilled); });
-  r.counter_fn("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", {},
-               [&s] { return Value(s.mqtt_storage_bytes); });
-  r.counter_fn("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", {},
-               [&s] { return Value(s.mqtt_storage_syncs); });
-  r.counter_fn("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
-               {}, [&s] { return Value(s.mqtt_storage_errors); });
-  r.gauge_fn("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", {},
-             [&s] { return Value(s.mqtt_storage_failing); });
-  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_records_total",
-               "MQTT queue records lost to corruption, found when the queue was opened.", {},
-               [&s] { return Value(s.mqtt_corrupt_records); });
-  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_bytes_total",
-               "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", {},
-               [&s] { return Value(s.mqtt_corrupt_bytes); });
-  r.counter_fn("canopen_gateway_mqtt_stalls_total",
-               "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
-               "flight).",
-               {}, [&s] { return Value(s.mqtt_stalls); });
-}
-
-}  // namespace
-
 std::string render_metrics(const MetricsSnapshot& s) {
   Registry r;
   if (!s.version.empty()) register_build_info(r, s.version);
   register_network_families(r);
   for (const auto& n : s.networks) register_network(r, [&n] { return n; });
-  register_services(r, s);
+  register_requests(
+      r,
+      [&s] {
+        return RequestMetrics{s.sdo_requests,        s.sdo_aborts,           s.sdo_timeouts, s.nmt_commands,
+                              s.request_auth_failures, s.requests_over_sdo_share, s.mqtt_requests_rate_limited};
+      },
+      s.sdo_latency_bounds,
+      s.sdo_latency_bounds.empty() ? std::function<HistogramValues()>{}
+                                   : [&s] { return HistogramValues{s.sdo_latency_counts, s.sdo_latency_sum}; });
   register_events_by_kind(r, [&s] { return s.events_by_kind; });
-  register_mqtt(r, s);
+  if (s.mqtt_enabled)
+    register_mqtt(r, [&s] {
+      return MqttMetrics{s.mqtt_connected,       s.mqtt_published,      s.mqtt_acked,         s.mqtt_dropped,
+                         s.mqtt_queue_depth,     s.mqtt_queue_bytes,    s.mqtt_reconnects,    s.mqtt_requests_refused,
+                         s.mqtt_dropped_by_reason, s.mqtt_memory_depth, s.mqtt_spilled,       s.mqtt_storage_bytes,
+                         s.mqtt_storage_syncs,   s.mqtt_storage_errors, s.mqtt_storage_failing, s.mqtt_corrupt_records,
+                         s.mqtt_corrupt_bytes,   s.mqtt_stalls};
+    });
+  else
+    register_mqtt(r, {});
   register_http_server(
       r,
       [&s] {
@@ -399,6 +325,98 @@ void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, 
   r.counter_fn(req, req_help, {{"reason", "host"}}, conn(&HttpConnectionMetrics::refused_host));
   r.counter_fn(req, req_help, {{"reason", "origin"}}, conn(&HttpConnectionMetrics::refused_origin));
   r.counter_fn(req, req_help, {{"reason", "media-type"}}, conn(&HttpConnectionMetrics::refused_media_type));
+}
+
+// The request handler's CANopen services (SDO, NMT, refusals).
+void register_requests(Registry& r, std::function<RequestMetrics()> read, const std::vector<double>& sdo_latency_bounds,
+                       std::function<HistogramValues()> sdo_latency) {
+  const RequestMetrics now = read();
+  auto field = [&read](std::uint64_t RequestMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  auto optional = [&read](std::optional<std::uint64_t> RequestMetrics::*f) {
+    return [read, f] { return Value((read().*f).value_or(0)); };
+  };
+  r.counter_fn("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", {},
+               field(&RequestMetrics::sdo_requests));
+  r.counter_fn("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", {},
+               field(&RequestMetrics::sdo_aborts));
+  r.counter_fn("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", {},
+               field(&RequestMetrics::sdo_timeouts));
+  r.counter_fn("canopen_gateway_nmt_commands_total", "NMT commands sent.", {}, field(&RequestMetrics::nmt_commands));
+  if (sdo_latency)
+    r.histogram_fn("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
+                   sdo_latency_bounds, std::move(sdo_latency));
+  if (now.auth_failures)
+    r.counter_fn("canopen_gateway_request_auth_failures_total",
+                 "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", {},
+                 optional(&RequestMetrics::auth_failures));
+  if (now.over_sdo_share || now.mqtt_rate_limited) {
+    static constexpr std::string_view limited = "canopen_gateway_requests_limited_total";
+    static constexpr std::string_view help =
+        "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
+        "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).";
+    r.family(limited, help, MetricType::Counter);
+    if (now.over_sdo_share)
+      r.counter_fn(limited, help, {{"reason", "sdo-queue-share"}}, optional(&RequestMetrics::over_sdo_share));
+    if (now.mqtt_rate_limited)
+      r.counter_fn(limited, help, {{"reason", "mqtt-rate-limit"}},
+                   optional(&RequestMetrics::mqtt_rate_limited));
+  }
+}
+
+// The MQTT publisher and its queue.
+void register_mqtt(Registry& r, std::function<MqttMetrics()> read) {
+  auto field = [&read](auto MqttMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  const bool enabled = static_cast<bool>(read);
+  r.gauge_fn("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", {},
+             [enabled] { return Value(enabled); });
+  if (!enabled) return;
+  r.gauge_fn("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", {},
+             field(&MqttMetrics::connected));
+  static constexpr std::string_view msgs = "canopen_gateway_mqtt_messages_total";
+  static constexpr std::string_view msgs_help =
+      "MQTT messages by result: published (handed to the broker), acked, dropped.";
+  r.counter_fn(msgs, msgs_help, {{"result", "published"}}, field(&MqttMetrics::published));
+  r.counter_fn(msgs, msgs_help, {{"result", "acked"}}, field(&MqttMetrics::acked));
+  r.counter_fn(msgs, msgs_help, {{"result", "dropped"}}, field(&MqttMetrics::dropped));
+  r.gauge_fn("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", {},
+             field(&MqttMetrics::queue_depth));
+  r.gauge_fn("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", {},
+             field(&MqttMetrics::queue_bytes));
+  r.counter_fn("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", {},
+               field(&MqttMetrics::reconnects));
+  r.counter_fn("canopen_gateway_mqtt_requests_refused_total",
+               "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
+               "correlation data over 1 KiB.",
+               {}, field(&MqttMetrics::requests_refused));
+  r.collect("canopen_gateway_mqtt_dropped_total",
+            "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
+            "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
+            MetricType::Counter, [read](const Registry::Emit& emit) {
+              for (const auto& [reason, n] : read().dropped_by_reason) emit({{"reason", reason}}, n);
+            });
+  r.gauge_fn("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
+             {}, field(&MqttMetrics::memory_depth));
+  r.counter_fn("canopen_gateway_mqtt_spilled_total",
+               "MQTT messages of outage kinds written to disk because the broker was away or memory full.", {},
+               field(&MqttMetrics::spilled));
+  r.counter_fn("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", {},
+               field(&MqttMetrics::storage_bytes));
+  r.counter_fn("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", {},
+               field(&MqttMetrics::storage_syncs));
+  r.counter_fn("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
+               {}, field(&MqttMetrics::storage_errors));
+  r.gauge_fn("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", {},
+             field(&MqttMetrics::storage_failing));
+  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_records_total",
+               "MQTT queue records lost to corruption, found when the queue was opened.", {},
+               field(&MqttMetrics::corrupt_records));
+  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_bytes_total",
+               "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", {},
+               field(&MqttMetrics::corrupt_bytes));
+  r.counter_fn("canopen_gateway_mqtt_stalls_total",
+               "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
+               "flight).",
+               {}, field(&MqttMetrics::stalls));
 }
 
 }  // namespace gateway::metrics

@@ -9,9 +9,10 @@ add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/outbound_queue.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stall_detector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mqtt_connection.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mqtt_metrics.cpp)
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_mqtt
-  PUBLIC gateway_lib gateway_mqtt_codec Boost::json OpenSSL::SSL OpenSSL::Crypto
+  PUBLIC gateway_lib gateway_mqtt_codec gateway_metrics Boost::json OpenSSL::SSL OpenSSL::Crypto
   PRIVATE gateway_messages  # problem replies as the App and REST build them
   PRIVATE canopen_options)
