@@ -11,9 +11,9 @@ add_library(gateway_http_core STATIC
   ${CMAKE_CURRENT_LIST_DIR}/static_files.cpp)
 target_include_directories(gateway_http_core PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(gateway_http_core PUBLIC gateway_lib Boost::headers PRIVATE gateway_core_types Boost::json canopen_options)
-add_library(gateway_http STATIC ${CMAKE_CURRENT_LIST_DIR}/server.cpp)
+add_library(gateway_http STATIC ${CMAKE_CURRENT_LIST_DIR}/server.cpp ${CMAKE_CURRENT_LIST_DIR}/http_metrics.cpp)
 target_link_libraries(gateway_http
-  PUBLIC gateway_http_core gateway_lib Boost::headers
+  PUBLIC gateway_http_core gateway_lib gateway_metrics Boost::headers
   PRIVATE Boost::json Boost::url OpenSSL::SSL OpenSSL::Crypto Threads::Threads canopen_options)
 # Beast at -O2 with full debug info peaks at ~3.2 GB of compiler memory and
 # ~110 s CPU for server.cpp; line tables only (-g1) cut that to ~2.1 GB and

@@ -1,5 +1,7 @@
 #include "metrics.hpp"
 
+#include "registry.hpp"
+
 #include <array>
 #include <charconv>
 #include <cstdio>
@@ -178,162 +180,243 @@ std::string TextWriter::str() const {
   return out;
 }
 
+// The gateway's families, registered per component from the snapshot; the
+// reads run at render() below, while `s` is alive.
 std::string render_metrics(const MetricsSnapshot& s) {
-  constexpr auto C = MetricType::Counter;
-  constexpr auto G = MetricType::Gauge;
-  TextWriter w;
+  Registry r;
+  if (!s.version.empty()) register_build_info(r, s.version);
+  register_network_families(r);
+  for (const auto& n : s.networks) register_network(r, [&n] { return n; });
+  register_requests(
+      r,
+      [&s] {
+        return RequestMetrics{s.sdo_requests,        s.sdo_aborts,           s.sdo_timeouts, s.nmt_commands,
+                              s.request_auth_failures, s.requests_over_sdo_share, s.mqtt_requests_rate_limited};
+      },
+      s.sdo_latency_bounds,
+      s.sdo_latency_bounds.empty() ? std::function<HistogramValues()>{}
+                                   : [&s] { return HistogramValues{s.sdo_latency_counts, s.sdo_latency_sum}; });
+  register_events_by_kind(r, [&s] { return s.events_by_kind; });
+  if (s.mqtt_enabled)
+    register_mqtt(r, [&s] {
+      return MqttMetrics{s.mqtt_connected,       s.mqtt_published,      s.mqtt_acked,         s.mqtt_dropped,
+                         s.mqtt_queue_depth,     s.mqtt_queue_bytes,    s.mqtt_reconnects,    s.mqtt_requests_refused,
+                         s.mqtt_dropped_by_reason, s.mqtt_memory_depth, s.mqtt_spilled,       s.mqtt_storage_bytes,
+                         s.mqtt_storage_syncs,   s.mqtt_storage_errors, s.mqtt_storage_failing, s.mqtt_corrupt_records,
+                         s.mqtt_corrupt_bytes,   s.mqtt_stalls};
+    });
+  else
+    register_mqtt(r, {});
+  register_http_server(
+      r,
+      [&s] {
+        HttpServerMetrics m{s.ws_clients, s.ws_messages_sent, s.ws_messages_dropped, s.http_responses_by_status, {}};
+        if (s.http_connections) m.connections = *s.http_connections;
+        return m;
+      },
+      s.http_connections.has_value());
+  register_uptime(r, [&s] { return s.uptime_seconds; });
+  return r.render();
+}
 
-  if (!s.version.empty()) {
-    w.family("canopen_gateway_build_info", "Gateway build; the value is always 1.", G);
-    w.sample("canopen_gateway_build_info", {{"version", s.version}}, 1U);
+
+namespace {
+constexpr std::string_view kFrames = "canopen_gateway_can_frames_total";
+constexpr std::string_view kDropped = "canopen_gateway_can_frames_dropped_total";
+constexpr std::string_view kErrors = "canopen_gateway_can_error_frames_total";
+constexpr std::string_view kReopens = "canopen_gateway_can_reopens_total";
+constexpr std::string_view kBus = "canopen_gateway_bus_state";
+constexpr std::string_view kNetEvents = "canopen_gateway_network_events_total";
+constexpr std::string_view kFramesHelp = "CAN frames received (rx) and sent (tx) per network.";
+constexpr std::string_view kDroppedHelp =
+    "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.";
+constexpr std::string_view kErrorsHelp = "CAN error frames received per network.";
+constexpr std::string_view kReopensHelp = "Times the CAN socket of a network was reopened after the link came back.";
+constexpr std::string_view kBusHelp = "CAN controller state per network: 1 for the current state, 0 for the others.";
+constexpr std::string_view kNetEventsHelp = "Events produced by each network.";
+}  // namespace
+
+void register_build_info(Registry& r, const std::string& version) {
+  r.gauge_fn("canopen_gateway_build_info", "Gateway build; the value is always 1.", {{"version", version}},
+             [] { return Value(1U); });
+}
+
+void register_network_families(Registry& r) {
+  r.family(kFrames, kFramesHelp, MetricType::Counter);
+  r.family(kDropped, kDroppedHelp, MetricType::Counter);
+  r.family(kErrors, kErrorsHelp, MetricType::Counter);
+  r.family(kReopens, kReopensHelp, MetricType::Counter);
+  r.family(kBus, kBusHelp, MetricType::Gauge);
+  r.family(kNetEvents, kNetEventsHelp, MetricType::Counter);
+}
+
+void register_network(Registry& r, const std::function<NetworkMetrics()>& read) {
+  const NetworkMetrics now = read();
+  const std::string id = integer_text(now.network);
+  auto labels = [&](std::string_view k, std::string_view v) {
+    Labels l{{"network", id}, {"interface", now.interface}};
+    if (!k.empty()) l.emplace_back(std::string(k), std::string(v));
+    return l;
+  };
+  auto field = [&read](std::uint64_t NetworkMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  r.counter_fn(kFrames, kFramesHelp, labels("direction", "rx"), field(&NetworkMetrics::rx_frames));
+  r.counter_fn(kFrames, kFramesHelp, labels("direction", "tx"), field(&NetworkMetrics::tx_frames));
+  r.counter_fn(kDropped, kDroppedHelp, labels("direction", "rx"), field(&NetworkMetrics::rx_dropped));
+  r.counter_fn(kDropped, kDroppedHelp, labels("direction", "tx"), field(&NetworkMetrics::tx_dropped));
+  r.counter_fn(kErrors, kErrorsHelp, labels({}, {}), field(&NetworkMetrics::error_frames));
+  r.counter_fn(kReopens, kReopensHelp, labels({}, {}), field(&NetworkMetrics::reopens));
+  for (std::string_view state : kBusStates) {
+    r.gauge_fn(kBus, kBusHelp, labels("state", state), [read, state] { return Value(read().bus_state == state); });
   }
+  r.counter_fn(kNetEvents, kNetEventsHelp, labels({}, {}), field(&NetworkMetrics::events));
+}
 
-  // Per CAN network.
-  const std::string frames = "canopen_gateway_can_frames_total";
-  const std::string dropped = "canopen_gateway_can_frames_dropped_total";
-  const std::string errors = "canopen_gateway_can_error_frames_total";
-  const std::string reopens = "canopen_gateway_can_reopens_total";
-  const std::string bus = "canopen_gateway_bus_state";
-  const std::string net_events = "canopen_gateway_network_events_total";
-  w.family(frames, "CAN frames received (rx) and sent (tx) per network.", C);
-  w.family(dropped, "CAN frames lost per network: rx overflow in kernel or controller, tx queue full.", C);
-  w.family(errors, "CAN error frames received per network.", C);
-  w.family(reopens, "Times the CAN socket of a network was reopened after the link came back.", C);
-  w.family(bus, "CAN controller state per network: 1 for the current state, 0 for the others.", G);
-  w.family(net_events, "Events produced by each network.", C);
-  for (const auto& n : s.networks) {
-    const std::string id = integer_text(n.network);
-    auto labels = [&](std::string_view k, std::string_view v) {
-      Labels l{{"network", id}, {"interface", n.interface}};
-      if (!k.empty()) l.emplace_back(std::string(k), std::string(v));
-      return l;
-    };
-    w.sample(frames, labels("direction", "rx"), n.rx_frames);
-    w.sample(frames, labels("direction", "tx"), n.tx_frames);
-    w.sample(dropped, labels("direction", "rx"), n.rx_dropped);
-    w.sample(dropped, labels("direction", "tx"), n.tx_dropped);
-    w.sample(errors, labels({}, {}), n.error_frames);
-    w.sample(reopens, labels({}, {}), n.reopens);
-    for (std::string_view state : kBusStates) {
-      w.sample(bus, labels("state", state), n.bus_state == state);
-    }
-    w.sample(net_events, labels({}, {}), n.events);
+void register_events_by_kind(Registry& r, std::function<std::map<std::string, std::uint64_t>()> read) {
+  r.collect("canopen_gateway_events_published_total", "Events published to clients, by kind.", MetricType::Counter,
+            [read = std::move(read)](const Registry::Emit& emit) {
+              for (const auto& [kind, n] : read()) emit({{"kind", kind}}, n);
+            });
+}
+
+void register_uptime(Registry& r, std::function<double()> seconds) {
+  r.gauge_fn("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", {},
+             [seconds = std::move(seconds)] { return Value(seconds()); });
+}
+
+// The HTTP server: WebSocket hub, responses, connection handling.
+void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, bool with_connections) {
+  auto field = [&read](auto HttpServerMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  auto conn = [&read](std::uint64_t HttpConnectionMetrics::*f) {
+    return [read, f] { return Value(read().connections.*f); };
+  };
+  r.gauge_fn("canopen_gateway_websocket_clients", "Connected WebSocket clients.", {},
+             field(&HttpServerMetrics::ws_clients));
+  static constexpr std::string_view ws = "canopen_gateway_websocket_messages_total";
+  static constexpr std::string_view ws_help = "WebSocket messages by result: sent, or dropped for a slow client.";
+  r.counter_fn(ws, ws_help, {{"result", "sent"}}, field(&HttpServerMetrics::ws_messages_sent));
+  r.counter_fn(ws, ws_help, {{"result", "dropped"}}, field(&HttpServerMetrics::ws_messages_dropped));
+  r.collect("canopen_gateway_http_responses_total", "HTTP responses by status code.", MetricType::Counter,
+            [read](const Registry::Emit& emit) {
+              for (const auto& [code, n] : read().responses_by_status) emit({{"code", integer_text(code)}}, n);
+            });
+  if (!with_connections) return;
+  static constexpr std::string_view conns = "canopen_gateway_http_connections";
+  static constexpr std::string_view conns_help =
+      "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.";
+  r.gauge_fn(conns, conns_help, {{"state", "open"}}, conn(&HttpConnectionMetrics::open));
+  r.gauge_fn(conns, conns_help, {{"state", "idle"}}, conn(&HttpConnectionMetrics::idle));
+  static constexpr std::string_view refused = "canopen_gateway_http_connections_refused_total";
+  static constexpr std::string_view refused_help =
+      "New connections closed at once: their client address had http.max-connections-per-address open "
+      "(per-address), or http.max-connections were open and none idle (full).";
+  r.counter_fn(refused, refused_help, {{"reason", "per-address"}}, conn(&HttpConnectionMetrics::refused_per_address));
+  r.counter_fn(refused, refused_help, {{"reason", "full"}}, conn(&HttpConnectionMetrics::refused_full));
+  r.counter_fn("canopen_gateway_http_connections_evicted_total",
+               "Idle connections closed to admit a new one at http.max-connections.", {},
+               conn(&HttpConnectionMetrics::evicted_idle));
+  r.counter_fn("canopen_gateway_http_header_timeouts_total",
+               "Connections closed because a request header did not arrive in time (slow clients).", {},
+               conn(&HttpConnectionMetrics::header_timeouts));
+  static constexpr std::string_view req = "canopen_gateway_http_requests_refused_total";
+  static constexpr std::string_view req_help =
+      "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
+      "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).";
+  r.counter_fn(req, req_help, {{"reason", "framing"}}, conn(&HttpConnectionMetrics::refused_framing));
+  r.counter_fn(req, req_help, {{"reason", "host"}}, conn(&HttpConnectionMetrics::refused_host));
+  r.counter_fn(req, req_help, {{"reason", "origin"}}, conn(&HttpConnectionMetrics::refused_origin));
+  r.counter_fn(req, req_help, {{"reason", "media-type"}}, conn(&HttpConnectionMetrics::refused_media_type));
+}
+
+// The request handler's CANopen services (SDO, NMT, refusals).
+void register_requests(Registry& r, std::function<RequestMetrics()> read, const std::vector<double>& sdo_latency_bounds,
+                       std::function<HistogramValues()> sdo_latency) {
+  const RequestMetrics now = read();
+  auto field = [&read](std::uint64_t RequestMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  auto optional = [&read](std::optional<std::uint64_t> RequestMetrics::*f) {
+    return [read, f] { return Value((read().*f).value_or(0)); };
+  };
+  r.counter_fn("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", {},
+               field(&RequestMetrics::sdo_requests));
+  r.counter_fn("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", {},
+               field(&RequestMetrics::sdo_aborts));
+  r.counter_fn("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", {},
+               field(&RequestMetrics::sdo_timeouts));
+  r.counter_fn("canopen_gateway_nmt_commands_total", "NMT commands sent.", {}, field(&RequestMetrics::nmt_commands));
+  if (sdo_latency)
+    r.histogram_fn("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
+                   sdo_latency_bounds, std::move(sdo_latency));
+  if (now.auth_failures)
+    r.counter_fn("canopen_gateway_request_auth_failures_total",
+                 "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", {},
+                 optional(&RequestMetrics::auth_failures));
+  if (now.over_sdo_share || now.mqtt_rate_limited) {
+    static constexpr std::string_view limited = "canopen_gateway_requests_limited_total";
+    static constexpr std::string_view help =
+        "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
+        "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).";
+    r.family(limited, help, MetricType::Counter);
+    if (now.over_sdo_share)
+      r.counter_fn(limited, help, {{"reason", "sdo-queue-share"}}, optional(&RequestMetrics::over_sdo_share));
+    if (now.mqtt_rate_limited)
+      r.counter_fn(limited, help, {{"reason", "mqtt-rate-limit"}},
+                   optional(&RequestMetrics::mqtt_rate_limited));
   }
+}
 
-  // CANopen services.
-  w.single("canopen_gateway_sdo_requests_total", "SDO transfers started by the gateway.", C, s.sdo_requests);
-  w.single("canopen_gateway_sdo_aborts_total", "SDO transfers that ended with an abort.", C, s.sdo_aborts);
-  w.single("canopen_gateway_sdo_timeouts_total", "SDO transfers that timed out.", C, s.sdo_timeouts);
-  w.single("canopen_gateway_nmt_commands_total", "NMT commands sent.", C, s.nmt_commands);
-  if (!s.sdo_latency_bounds.empty())
-    w.histogram("canopen_gateway_sdo_latency_seconds", "SDO transfers from submission to result, queueing included.",
-                s.sdo_latency_bounds, s.sdo_latency_counts, s.sdo_latency_sum);
-  if (s.request_auth_failures)
-    w.single("canopen_gateway_request_auth_failures_total",
-             "Requests refused with 401/403 by the request handler (MQTT requests, NMT resets).", C,
-             *s.request_auth_failures);
-  if (s.requests_over_sdo_share || s.mqtt_requests_rate_limited) {
-    const std::string limited = "canopen_gateway_requests_limited_total";
-    w.family(limited,
-             "Requests answered 429 for their caller by the request handler: sdo-queue-share (the caller had its "
-             "share of the node's SDO queue waiting), mqtt-rate-limit (an MQTT caller over http.rate-limit).",
-             C);
-    if (s.requests_over_sdo_share) w.sample(limited, {{"reason", "sdo-queue-share"}}, *s.requests_over_sdo_share);
-    if (s.mqtt_requests_rate_limited)
-      w.sample(limited, {{"reason", "mqtt-rate-limit"}}, *s.mqtt_requests_rate_limited);
-  }
-
-  const std::string events = "canopen_gateway_events_published_total";
-  w.family(events, "Events published to clients, by kind.", C);
-  for (const auto& [kind, n] : s.events_by_kind) w.sample(events, {{"kind", kind}}, n);
-
-  // MQTT.
-  w.single("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", G, s.mqtt_enabled);
-  if (s.mqtt_enabled) {
-    w.single("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", G, s.mqtt_connected);
-    const std::string msgs = "canopen_gateway_mqtt_messages_total";
-    w.family(msgs, "MQTT messages by result: published (handed to the broker), acked, dropped.", C);
-    w.sample(msgs, {{"result", "published"}}, s.mqtt_published);
-    w.sample(msgs, {{"result", "acked"}}, s.mqtt_acked);
-    w.sample(msgs, {{"result", "dropped"}}, s.mqtt_dropped);
-    w.single("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", G, s.mqtt_queue_depth);
-    w.single("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", G,
-             s.mqtt_queue_bytes);
-    w.single("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", C, s.mqtt_reconnects);
-    w.single("canopen_gateway_mqtt_requests_refused_total",
-             "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
-             "correlation data over 1 KiB.",
-             C, s.mqtt_requests_refused);
-    const std::string mqtt_dropped = "canopen_gateway_mqtt_dropped_total";
-    w.family(mqtt_dropped,
-             "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
-             "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
-             C);
-    for (const auto& [reason, n] : s.mqtt_dropped_by_reason) w.sample(mqtt_dropped, {{"reason", reason}}, n);
-    w.single("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
-             G, s.mqtt_memory_depth);
-    w.single("canopen_gateway_mqtt_spilled_total",
-             "MQTT messages of outage kinds written to disk because the broker was away or memory full.", C,
-             s.mqtt_spilled);
-    w.single("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", C,
-             s.mqtt_storage_bytes);
-    w.single("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", C,
-             s.mqtt_storage_syncs);
-    w.single("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
-             C, s.mqtt_storage_errors);
-    w.single("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", G,
-             s.mqtt_storage_failing);
-    w.single("canopen_gateway_mqtt_queue_corrupt_records_total",
-             "MQTT queue records lost to corruption, found when the queue was opened.", C, s.mqtt_corrupt_records);
-    w.single("canopen_gateway_mqtt_queue_corrupt_bytes_total",
-             "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", C,
-             s.mqtt_corrupt_bytes);
-    w.single("canopen_gateway_mqtt_stalls_total",
-             "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
-             "flight).",
-             C, s.mqtt_stalls);
-  }
-
-  // WebSocket and HTTP.
-  w.single("canopen_gateway_websocket_clients", "Connected WebSocket clients.", G, s.ws_clients);
-  const std::string ws = "canopen_gateway_websocket_messages_total";
-  w.family(ws, "WebSocket messages by result: sent, or dropped for a slow client.", C);
-  w.sample(ws, {{"result", "sent"}}, s.ws_messages_sent);
-  w.sample(ws, {{"result", "dropped"}}, s.ws_messages_dropped);
-
-  const std::string http = "canopen_gateway_http_responses_total";
-  w.family(http, "HTTP responses by status code.", C);
-  for (const auto& [code, n] : s.http_responses_by_status) w.sample(http, {{"code", integer_text(code)}}, n);
-  if (const auto& hc = s.http_connections) {
-    const std::string conns = "canopen_gateway_http_connections";
-    w.family(conns, "Open HTTP and WebSocket connections; idle: HTTP ones waiting for a request.", G);
-    w.sample(conns, {{"state", "open"}}, hc->open);
-    w.sample(conns, {{"state", "idle"}}, hc->idle);
-    const std::string refused = "canopen_gateway_http_connections_refused_total";
-    w.family(refused,
-             "New connections closed at once: their client address had http.max-connections-per-address open "
-             "(per-address), or http.max-connections were open and none idle (full).",
-             C);
-    w.sample(refused, {{"reason", "per-address"}}, hc->refused_per_address);
-    w.sample(refused, {{"reason", "full"}}, hc->refused_full);
-    w.single("canopen_gateway_http_connections_evicted_total",
-             "Idle connections closed to admit a new one at http.max-connections.", C, hc->evicted_idle);
-    w.single("canopen_gateway_http_header_timeouts_total",
-             "Connections closed because a request header did not arrive in time (slow clients).", C,
-             hc->header_timeouts);
-    const std::string req = "canopen_gateway_http_requests_refused_total";
-    w.family(req,
-             "Requests refused before their route ran: ambiguous framing (400), Host not the gateway's (421/400), "
-             "Origin not the gateway's nor allowed (403), body neither JSON nor protobuf (415).",
-             C);
-    w.sample(req, {{"reason", "framing"}}, hc->refused_framing);
-    w.sample(req, {{"reason", "host"}}, hc->refused_host);
-    w.sample(req, {{"reason", "origin"}}, hc->refused_origin);
-    w.sample(req, {{"reason", "media-type"}}, hc->refused_media_type);
-  }
-
-  w.single("canopen_gateway_uptime_seconds", "Seconds since the gateway started.", G, s.uptime_seconds);
-  return w.str();
+// The MQTT publisher and its queue.
+void register_mqtt(Registry& r, std::function<MqttMetrics()> read) {
+  auto field = [&read](auto MqttMetrics::*f) { return [read, f] { return Value(read().*f); }; };
+  const bool enabled = static_cast<bool>(read);
+  r.gauge_fn("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", {},
+             [enabled] { return Value(enabled); });
+  if (!enabled) return;
+  r.gauge_fn("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", {},
+             field(&MqttMetrics::connected));
+  static constexpr std::string_view msgs = "canopen_gateway_mqtt_messages_total";
+  static constexpr std::string_view msgs_help =
+      "MQTT messages by result: published (handed to the broker), acked, dropped.";
+  r.counter_fn(msgs, msgs_help, {{"result", "published"}}, field(&MqttMetrics::published));
+  r.counter_fn(msgs, msgs_help, {{"result", "acked"}}, field(&MqttMetrics::acked));
+  r.counter_fn(msgs, msgs_help, {{"result", "dropped"}}, field(&MqttMetrics::dropped));
+  r.gauge_fn("canopen_gateway_mqtt_queue_depth", "MQTT messages waiting to be sent.", {},
+             field(&MqttMetrics::queue_depth));
+  r.gauge_fn("canopen_gateway_mqtt_queue_bytes", "Bytes of MQTT messages waiting to be sent.", {},
+             field(&MqttMetrics::queue_bytes));
+  r.counter_fn("canopen_gateway_mqtt_reconnects_total", "Reconnections to the MQTT broker.", {},
+               field(&MqttMetrics::reconnects));
+  r.counter_fn("canopen_gateway_mqtt_requests_refused_total",
+               "MQTT requests dropped unanswered and not executed: reply topic not allowed (mqtt.reply-topics) or "
+               "correlation data over 1 KiB.",
+               {}, field(&MqttMetrics::requests_refused));
+  r.collect("canopen_gateway_mqtt_dropped_total",
+            "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
+            "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
+            MetricType::Counter, [read](const Registry::Emit& emit) {
+              for (const auto& [reason, n] : read().dropped_by_reason) emit({{"reason", reason}}, n);
+            });
+  r.gauge_fn("canopen_gateway_mqtt_memory_queue_depth", "MQTT messages waiting in memory (outage and memory kinds).",
+             {}, field(&MqttMetrics::memory_depth));
+  r.counter_fn("canopen_gateway_mqtt_spilled_total",
+               "MQTT messages of outage kinds written to disk because the broker was away or memory full.", {},
+               field(&MqttMetrics::spilled));
+  r.counter_fn("canopen_gateway_mqtt_storage_written_bytes_total", "Bytes the MQTT queue wrote to its files.", {},
+               field(&MqttMetrics::storage_bytes));
+  r.counter_fn("canopen_gateway_mqtt_storage_syncs_total", "fdatasync calls of the MQTT queue.", {},
+               field(&MqttMetrics::storage_syncs));
+  r.counter_fn("canopen_gateway_mqtt_storage_errors_total", "Failed writes of the MQTT queue (disk full, I/O errors).",
+               {}, field(&MqttMetrics::storage_errors));
+  r.gauge_fn("canopen_gateway_mqtt_storage_failing", "1 while the MQTT queue cannot write to its files.", {},
+             field(&MqttMetrics::storage_failing));
+  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_records_total",
+               "MQTT queue records lost to corruption, found when the queue was opened.", {},
+               field(&MqttMetrics::corrupt_records));
+  r.counter_fn("canopen_gateway_mqtt_queue_corrupt_bytes_total",
+               "Bytes of the MQTT queue's files skipped as corrupt or torn when it was opened.", {},
+               field(&MqttMetrics::corrupt_bytes));
+  r.counter_fn("canopen_gateway_mqtt_stalls_total",
+               "Times MQTT delivery was restarted because it had stalled (no acknowledgement while messages were in "
+               "flight).",
+               {}, field(&MqttMetrics::stalls));
 }
 
 }  // namespace gateway::metrics

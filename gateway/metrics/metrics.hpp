@@ -1,13 +1,20 @@
 // Prometheus text exposition (format 0.0.4) for GET /metrics: a small,
-// dependency-free writer and the gateway's metric families rendered from a
-// plain snapshot. The caller fills MetricsSnapshot from the live parts
-// (channels, SDO client, MQTT publisher, WebSocket hub, HTTP server) and
-// serves render_metrics() with kContentType.
+// dependency-free writer and the gateway's metric families. Each family's
+// name, help and labels are defined once, in the register_* function of the
+// component that owns it (below), on a Registry (registry.hpp). Two ways to
+// serve /metrics with kContentType:
+//   - register the live components once (http_metrics.hpp,
+//     pipeline_metrics.hpp, mqtt/mqtt_metrics.hpp, register_requests() for
+//     the request core) and serve Registry::render();
+//   - fill a MetricsSnapshot from the live parts and serve render_metrics(),
+//     which registers the same functions reading the snapshot.
 //
-// Pure data and functions; thread-safe (no shared state).
+// TextWriter and render_metrics(): pure functions, thread-safe (no shared
+// state); the register_* functions: as the Registry.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -153,7 +160,68 @@ struct MetricsSnapshot {
 };
 
 // The whole /metrics body. Family order is fixed; series within a family
-// follow the snapshot's order (networks) or key order (maps).
+// follow the snapshot's order (networks) or key order (maps). Built on the
+// registry with the register_* functions below, reading the snapshot.
 std::string render_metrics(const MetricsSnapshot& s);
+
+// ---- Registration per component (registry.hpp) ----------------------------
+// Each registers its families once, with the names, help and labels above;
+// `read` runs at every render() and MUST stay valid as long as the registry
+// renders. Today's /metrics order results from registering in the order
+// render_metrics() does: build info, network families, networks, services
+// (request core), events, MQTT, HTTP, uptime.
+
+class Registry;
+struct HistogramValues;
+
+void register_build_info(Registry& r, const std::string& version);
+// The per-network families (frames, drops, error frames, reopens, bus
+// state, events), written even while no network is registered.
+void register_network_families(Registry& r);
+// One network: its channel's counters and bus state, the state cache's
+// event count. Labels network/interface are taken from read() now.
+void register_network(Registry& r, const std::function<NetworkMetrics()>& read);
+// The event pipeline: events published, by kind ("tpdo" -> n).
+void register_events_by_kind(Registry& r, std::function<std::map<std::string, std::uint64_t>()> read);
+
+// The HTTP server (HttpStats, as http_metrics.hpp fills it).
+struct HttpServerMetrics {
+  std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
+  std::map<int, std::uint64_t> responses_by_status;  // 200 -> n
+  HttpConnectionMetrics connections;
+};
+// with_connections false: no connection families (a snapshot without them).
+void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, bool with_connections = true);
+
+void register_uptime(Registry& r, std::function<double()> seconds);
+
+// The request core's counters (SDO, NMT, refusals). The optional families
+// are registered when read() has them at registration time.
+struct RequestMetrics {
+  std::uint64_t sdo_requests = 0, sdo_aborts = 0, sdo_timeouts = 0, nmt_commands = 0;
+  std::optional<std::uint64_t> auth_failures;  // 401/403 by the request handler
+  std::optional<std::uint64_t> over_sdo_share, mqtt_rate_limited;  // 429s
+};
+// sdo_latency: the SDO latency histogram (e.g. an owned Histogram's
+// values()); unset = no histogram family.
+void register_requests(Registry& r, std::function<RequestMetrics()> read, const std::vector<double>& sdo_latency_bounds,
+                       std::function<HistogramValues()> sdo_latency);
+
+// The MQTT publisher and its queue (mqtt/mqtt_metrics.hpp fills it).
+struct MqttMetrics {
+  bool connected = false;
+  std::uint64_t published = 0, acked = 0, dropped = 0;
+  std::uint64_t queue_depth = 0, queue_bytes = 0;
+  std::uint64_t reconnects = 0;
+  std::uint64_t requests_refused = 0;
+  std::map<std::string, std::uint64_t> dropped_by_reason;
+  std::uint64_t memory_depth = 0, spilled = 0;
+  std::uint64_t storage_bytes = 0, storage_syncs = 0, storage_errors = 0;
+  bool storage_failing = false;
+  std::uint64_t corrupt_records = 0, corrupt_bytes = 0;
+  std::uint64_t stalls = 0;
+};
+// An empty read: MQTT is off, only canopen_gateway_mqtt_enabled 0 is written.
+void register_mqtt(Registry& r, std::function<MqttMetrics()> read);
 
 }  // namespace gateway::metrics

@@ -12,8 +12,9 @@ add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/session.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mqtt_connection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/publisher.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/mqtt_requests.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/mqtt_requests.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mqtt_metrics.cpp)
 target_include_directories(gateway_mqtt PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_mqtt
-  PUBLIC gateway_lib gateway_mqtt_codec gateway_core_types gateway_messages Boost::json OpenSSL::SSL OpenSSL::Crypto
+  PUBLIC gateway_lib gateway_mqtt_codec gateway_core_types gateway_messages gateway_metrics Boost::json OpenSSL::SSL OpenSSL::Crypto
   PRIVATE canopen_options)

@@ -424,6 +424,32 @@ TEST(RenderMetrics, UnknownBusStateGivesAllZero) {
   EXPECT_EQ(text.find("\"} 1\n"), std::string::npos);
 }
 
+// The SDO latency histogram: cumulative buckets with the bounds as %g, +Inf,
+// _sum and _count, between the NMT counter and the refusals.
+TEST(RenderMetrics, SdoLatencyHistogram) {
+  MetricsSnapshot s;
+  s.sdo_latency_bounds = {0.0005, 0.001, 2.5};
+  s.sdo_latency_counts = {1, 0, 3, 2};
+  s.sdo_latency_sum = 7.25;
+  s.request_auth_failures = 0;
+  const std::string text = render_metrics(s);
+  const std::string expected =
+      "# HELP canopen_gateway_sdo_latency_seconds SDO transfers from submission to result, queueing included.\n"
+      "# TYPE canopen_gateway_sdo_latency_seconds histogram\n"
+      "canopen_gateway_sdo_latency_seconds_bucket{le=\"0.0005\"} 1\n"
+      "canopen_gateway_sdo_latency_seconds_bucket{le=\"0.001\"} 1\n"
+      "canopen_gateway_sdo_latency_seconds_bucket{le=\"2.5\"} 4\n"
+      "canopen_gateway_sdo_latency_seconds_bucket{le=\"+Inf\"} 6\n"
+      "canopen_gateway_sdo_latency_seconds_sum 7.25\n"
+      "canopen_gateway_sdo_latency_seconds_count 6\n";
+  const auto at = text.find(expected);
+  ASSERT_NE(at, std::string::npos) << text;
+  EXPECT_LT(text.find("canopen_gateway_nmt_commands_total 0"), at);
+  EXPECT_GT(text.find("# HELP canopen_gateway_request_auth_failures_total"), at);
+  s.sdo_latency_counts.pop_back();  // one count per bound plus one, or a programming error
+  EXPECT_THROW(render_metrics(s), std::invalid_argument);
+}
+
 TEST(Metrics, ContentType) { EXPECT_EQ(kContentType, "text/plain; version=0.0.4; charset=utf-8"); }
 
 }  // namespace

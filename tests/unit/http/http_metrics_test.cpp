@@ -1,0 +1,80 @@
+// The HTTP server's metrics as it registers them (gateway/http/http_metrics.hpp):
+// the families /metrics has always had, read from stats() at scrape time.
+#include "http_metrics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <boost/asio/connect.hpp>
+#include <boost/asio/executor_work_guard.hpp>
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/post.hpp>
+#include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/read.hpp>
+#include <boost/asio/write.hpp>
+#include <chrono>
+#include <string>
+#include <thread>
+#include <utility>
+
+namespace gateway::http {
+namespace {
+
+namespace asio = boost::asio;
+
+// The part of render_metrics()'s text that belongs to the HTTP server.
+std::string http_part(const metrics::MetricsSnapshot& s) {
+  const std::string all = metrics::render_metrics(s);
+  const auto begin = all.find("# HELP canopen_gateway_websocket_clients");
+  const auto end = all.find("# HELP canopen_gateway_uptime_seconds");
+  return all.substr(begin, end - begin);
+}
+
+TEST(HttpMetrics, RegisteredFamiliesMatchTheSnapshotsAndFollowTheServer) {
+  asio::io_context ioc;
+  HttpConfig cfg;
+  cfg.port = 0;
+  HttpServer server(ioc, cfg);
+  server.add_route("GET", "/ok", [](const Request&, Responder respond) {
+    Response r;
+    r.status = 200;
+    respond(std::move(r));
+  });
+  metrics::Registry r;
+  register_metrics(r, server);
+
+  metrics::MetricsSnapshot idle;
+  idle.http_connections.emplace();
+  EXPECT_EQ(r.render(), http_part(idle));
+
+  server.start();
+  auto guard = asio::make_work_guard(ioc);
+  std::thread io([&] { ioc.run(); });
+  {
+    asio::io_context client_io;
+    asio::ip::tcp::socket sock(client_io);
+    sock.connect({asio::ip::make_address("127.0.0.1"), server.bound_port()});
+    const std::string req = "GET /ok HTTP/1.1\r\nHost: 127.0.0.1:" + std::to_string(server.bound_port()) +
+                            "\r\nConnection: close\r\n\r\n";
+    asio::write(sock, asio::buffer(req));
+    boost::system::error_code ec;
+    std::string reply;
+    asio::read(sock, asio::dynamic_buffer(reply), ec);  // until the server closes
+    EXPECT_EQ(reply.substr(0, 12), "HTTP/1.1 200");
+  }
+  // The count is taken when the response is written; wait for it, bounded.
+  for (int i = 0; i < 500 && server.stats().responses_by_status.empty(); ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const HttpStats stats = server.stats();
+  metrics::MetricsSnapshot after;
+  after.http_responses_by_status = stats.responses_by_status;
+  after.http_connections = to_metrics(stats).connections;
+  const std::string text = r.render();
+  EXPECT_EQ(text, http_part(after));
+  EXPECT_NE(text.find("canopen_gateway_http_responses_total{code=\"200\"} 1\n"), std::string::npos);
+  guard.reset();
+  asio::post(ioc, [&] { server.stop(); });
+  io.join();
+}
+
+}  // namespace
+}  // namespace gateway::http
