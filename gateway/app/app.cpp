@@ -10,11 +10,14 @@
 #include "canopen/socketcan/link_monitor.hpp"
 #include "canopen/socketcan/service_driver.hpp"
 #include "composition.hpp"
+#include "core/core_metrics.hpp"
 #include "core/format.hpp"
 #include "event_encoder.hpp"
 #include "json_text.hpp"
+#include "mqtt/mqtt_metrics.hpp"
 #include "mqtt/mqtt_requests.hpp"
 #include "mqtt/publisher.hpp"
+#include "pipeline_metrics.hpp"
 #include "seq_store.hpp"
 #include "sim/asio_memory_bus.hpp"
 #include "sim/simulator.hpp"
@@ -138,6 +141,20 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
       monitor_(std::move(networks.monitor)),
       nets_(std::move(networks.units)) {
   for (auto& n : nets_) attach(*n);
+  // Each component's families, once, in the order /metrics has always
+  // written them (the HTTP server and the uptime follow, api_routes.cpp).
+  metrics::register_build_info(metrics_, std::string(version()));
+  metrics::register_network_families(metrics_);
+  for (const auto& n : nets_)
+    register_network_metrics(metrics_, cache_, n->number, [c = n->channel] { return c; });
+  core::register_metrics(metrics_, core_.counters());
+  register_metrics(metrics_, pipeline_);
+  if (config_.mqtt.enabled) {
+    mqtt_ = std::make_unique<Mqtt>();  // filled by start_mqtt()
+    mqtt::register_metrics(metrics_, mqtt_->publisher, mqtt_->requests);
+  } else {
+    metrics::register_mqtt(metrics_, {});
+  }
 }
 
 App::App(boost::asio::io_context& io, Config config, Logger& log)
@@ -230,36 +247,7 @@ std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_n
   return nets_[net_number - 1]->channel->stats();
 }
 
-std::optional<App::MqttCounters> App::mqtt_counters() const {
-  if (!mqtt_ || !mqtt_->publisher) return std::nullopt;
-  const auto c = mqtt_->publisher->counters();
-  MqttCounters out;
-  out.connected = c.connected;
-  out.published = c.published;
-  out.acked = c.acked;
-  out.dropped = c.dropped;
-  out.queue_depth = c.queue_depth;
-  out.queue_bytes = c.queue_bytes;
-  out.reconnects = c.reconnects;
-  out.requests_refused = mqtt_->requests ? mqtt_->requests->counters().replies_refused : 0;
-  out.stalls = c.stalls;
-  out.storage_failing = c.storage_failing;
-  const auto& q = mqtt_->publisher->queue_counters();
-  const auto& t = mqtt_->publisher->tier_counters();
-  out.memory_depth = t.memory_depth;
-  out.spilled = t.spilled + t.to_disk;
-  out.storage_bytes = q.storage_bytes;
-  out.storage_syncs = q.syncs;
-  out.storage_errors = q.write_errors;
-  out.corrupt_records = q.corrupt_records;
-  out.corrupt_bytes = q.corrupt_bytes + q.truncated_bytes;
-  out.dropped_by_reason = {{"queue_full", q.dropped_qos0 + q.dropped_qos1 + q.dropped_span},
-                           {"too_big", q.dropped_too_big},
-                           {"storage_full", q.dropped_full + t.dropped_spill},
-                           {"memory_full", t.dropped_memory},
-                           {"rejected", c.rejected}};
-  return out;
-}
+const mqtt::MqttPublisher* App::mqtt_publisher() const { return mqtt_ ? mqtt_->publisher.get() : nullptr; }
 
 void App::start() {
   if (started_ || stopped_) return;
@@ -299,7 +287,6 @@ void App::start() {
 }
 
 void App::start_mqtt() {
-  mqtt_ = std::make_unique<Mqtt>();
   // The publisher's settings as parsed; the rest is known only now.
   mqtt::MqttConfig mc = config_.mqtt;
   mc.gateway_id = config_.gateway_id;
