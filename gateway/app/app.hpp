@@ -68,6 +68,7 @@ class MqttPublisher;
 
 namespace gateway {
 
+class MqttOutput;
 struct Composition;
 struct NetworkUnit;
 
@@ -87,7 +88,7 @@ class App {
   void start();
   // Each network's last event (bus `down`); MQTT: what is queued and the
   // window allows, the retained node states deleted, the offline status
-  // with the stop time and uptime (publisher.hpp, Farewell); CAN closed;
+  // with the stop time and uptime (mqtt_output.hpp); CAN closed;
   // each network's seq stored exactly (config.state_dir). Blocks the io
   // thread up to 2 s for MQTT. Afterwards the io_context runs out of work.
   void stop();
@@ -180,9 +181,6 @@ class App {
   void audit(const std::string& line);
   // The request core's view of the networks (core::Networks).
   struct CoreNetworks;
-  void start_mqtt();
-  // The gateway status (MQTT payload format) as of now: time and uptime.
-  std::string status_payload(bool online) const;
 
   boost::asio::io_context& io_;
   Config config_;
@@ -199,9 +197,8 @@ class App {
   EventPipeline pipeline_;
   std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks
   std::vector<std::unique_ptr<Net>> nets_;
-  struct Mqtt;
-  std::unique_ptr<Mqtt> mqtt_;
   std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();
+  std::unique_ptr<MqttOutput> mqtt_;  // with MQTT on (config.mqtt.enabled)
   bool started_ = false;
   bool stopped_ = false;
 };
