@@ -1,8 +1,6 @@
 #include "app.hpp"
 
-#include <algorithm>
 #include <filesystem>
-#include <set>
 
 #include "canopen/eds/eds.hpp"
 #include "canopen/network.hpp"
@@ -10,14 +8,12 @@
 #include "canopen/socketcan/link_monitor.hpp"
 #include "canopen/socketcan/service_driver.hpp"
 #include "composition.hpp"
+#include "core/core_metrics.hpp"
 #include "core/format.hpp"
 #include "event_encoder.hpp"
-#include "json_text.hpp"
-#include "mqtt/mqtt_requests.hpp"
-#include "mqtt/publisher.hpp"
+#include "mqtt_output.hpp"
+#include "pipeline_metrics.hpp"
 #include "seq_store.hpp"
-#include "sim/asio_memory_bus.hpp"
-#include "sim/simulator.hpp"
 
 #ifndef CANOPEN_GATEWAY_VERSION
 #define CANOPEN_GATEWAY_VERSION "0.0.0"
@@ -105,14 +101,6 @@ struct App::CoreNetworks final : core::Networks {
   }
 };
 
-struct App::Mqtt {
-  std::unique_ptr<mqtt::MqttRequests> requests;  // before the publisher: its replies go through it
-  std::unique_ptr<mqtt::MqttPublisher> publisher;
-  // Retained node state topics to delete at a clean stop: every configured
-  // node's and every one published.
-  std::set<std::string> state_topics;
-};
-
 App::App(boost::asio::io_context& io, Config config, Logger& log, Composition networks)
     : io_(io),
       config_(std::move(config)),
@@ -138,6 +126,29 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
       monitor_(std::move(networks.monitor)),
       nets_(std::move(networks.units)) {
   for (auto& n : nets_) attach(*n);
+  // Each component's families, once, in the order /metrics has always
+  // written them (the HTTP server and the uptime follow, api_routes.cpp).
+  metrics::register_build_info(metrics_, std::string(version()));
+  metrics::register_network_families(metrics_);
+  for (const auto& n : nets_)
+    register_network_metrics(metrics_, cache_, n->number, [c = n->channel] { return c; });
+  core::register_metrics(metrics_, core_.counters());
+  register_metrics(metrics_, pipeline_);
+  if (config_.mqtt.enabled) {
+    MqttOutput::Status status{std::string(version()), nets_.empty() ? std::uint8_t{127} : nets_.front()->cfg.node_id,
+                              {}, started_at_};
+    std::vector<MqttOutput::Node> nodes;
+    for (const auto& n : nets_) {
+      status.networks.push_back(n->number);
+      for (const auto& node : n->cfg.nodes) nodes.push_back({n->number, node.id});
+    }
+    mqtt_ = std::make_unique<MqttOutput>(
+        io_, config_.mqtt, config_.gateway_id, log_, std::move(status), nodes,
+        [this](core::Request req, core::RequestCore::Done done) { core_.execute(std::move(req), std::move(done)); });
+    mqtt_->register_metrics(metrics_);
+  } else {
+    metrics::register_mqtt(metrics_, {});
+  }
 }
 
 App::App(boost::asio::io_context& io, Config config, Logger& log)
@@ -215,14 +226,12 @@ canopen::sim::Simulator* App::simulator(std::uint32_t net_number) {
 
 bool App::set_simulated_link(std::uint32_t net_number, bool up) {
   Net* n = net(net_number);
-  if (n == nullptr || !n->link.memory_gateway) return false;
-  n->link.memory_gateway->set_link_up(up);
-  return true;
+  return n != nullptr && n->link.set_simulated_link(up);
 }
 
 canopen::can::MemoryBus* App::simulated_bus(std::uint32_t net_number) {
   Net* n = net(net_number);
-  return n == nullptr || !n->link.memory_bus ? nullptr : &n->link.memory_bus->bus();
+  return n == nullptr ? nullptr : n->link.simulated_bus();
 }
 
 std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_number) const {
@@ -230,36 +239,7 @@ std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_n
   return nets_[net_number - 1]->channel->stats();
 }
 
-std::optional<App::MqttCounters> App::mqtt_counters() const {
-  if (!mqtt_ || !mqtt_->publisher) return std::nullopt;
-  const auto c = mqtt_->publisher->counters();
-  MqttCounters out;
-  out.connected = c.connected;
-  out.published = c.published;
-  out.acked = c.acked;
-  out.dropped = c.dropped;
-  out.queue_depth = c.queue_depth;
-  out.queue_bytes = c.queue_bytes;
-  out.reconnects = c.reconnects;
-  out.requests_refused = mqtt_->requests ? mqtt_->requests->counters().replies_refused : 0;
-  out.stalls = c.stalls;
-  out.storage_failing = c.storage_failing;
-  const auto& q = mqtt_->publisher->queue_counters();
-  const auto& t = mqtt_->publisher->tier_counters();
-  out.memory_depth = t.memory_depth;
-  out.spilled = t.spilled + t.to_disk;
-  out.storage_bytes = q.storage_bytes;
-  out.storage_syncs = q.syncs;
-  out.storage_errors = q.write_errors;
-  out.corrupt_records = q.corrupt_records;
-  out.corrupt_bytes = q.corrupt_bytes + q.truncated_bytes;
-  out.dropped_by_reason = {{"queue_full", q.dropped_qos0 + q.dropped_qos1 + q.dropped_span},
-                           {"too_big", q.dropped_too_big},
-                           {"storage_full", q.dropped_full + t.dropped_spill},
-                           {"memory_full", t.dropped_memory},
-                           {"rejected", c.rejected}};
-  return out;
-}
+const mqtt::MqttPublisher* App::mqtt_publisher() const { return mqtt_ ? mqtt_->publisher() : nullptr; }
 
 void App::start() {
   if (started_ || stopped_) return;
@@ -277,7 +257,10 @@ void App::start() {
                 opened.error.message() + " (numbers may repeat after a crash)");
     n->network->continue_sequence(opened.first);
   }
-  if (config_.mqtt.enabled) start_mqtt();
+  if (mqtt_) {
+    mqtt_->start();
+    pipeline_.add_consumer([out = mqtt_.get()](const EncodedEventPtr& ev) { out->on_event(ev); });
+  }
   for (auto& n : nets_) {
     // The state the channel was opened in: the channel reported it before
     // anyone listened, and the retained bus topic and the state cache (REST,
@@ -289,7 +272,7 @@ void App::start() {
                                                                  : canopen::can::BusEventCause::LinkUp;
     n->network->report(opened);
     n->local->start(n->now());  // boot-up (7.2.8.3.3), then heartbeats
-    if (n->link.simulator) n->link.simulator->start();
+    n->link.start_simulation();
   }
   std::string nets;
   for (const auto& n : nets_) nets += (nets.empty() ? "" : ", ") + n->label;
@@ -298,72 +281,10 @@ void App::start() {
   log_.flush();
 }
 
-void App::start_mqtt() {
-  mqtt_ = std::make_unique<Mqtt>();
-  // The publisher's settings as parsed; the rest is known only now.
-  mqtt::MqttConfig mc = config_.mqtt;
-  mc.gateway_id = config_.gateway_id;
-  // The Will is fixed at start: it carries the start time and uptime 0
-  // (the broker publishes it when it notices the loss; only a clean stop
-  // knows when it went offline).
-  mc.online_payload = status_payload(true);
-  mc.offline_payload = status_payload(false);
-  mqtt_->requests = std::make_unique<mqtt::MqttRequests>(
-      config_.gateway_id, config_.mqtt.reply_topics, log_,
-      [this](core::Request req, core::RequestCore::Done done) { core_.execute(std::move(req), std::move(done)); });
-  auto* requests = mqtt_->requests.get();
-  mqtt_->publisher = std::make_unique<mqtt::MqttPublisher>(
-      io_, mc, log_, [requests](const mqtt::codec::Publish& msg) { requests->on_publish(msg); });
-  auto* pub = mqtt_->publisher.get();
-  requests->set_reply_sender(pub->reply_sender());
-  for (const auto& n : nets_) {
-    for (const auto& node : n->cfg.nodes) mqtt_->state_topics.insert(node_topic(encode_ctx_, n->number, node.id, "state"));
-  }
-  const bool heartbeats = config_.mqtt.heartbeat;
-  const auto min_interval = config_.mqtt.heartbeat_min_interval;
-  pipeline_.add_consumer([this, pub, heartbeats, min_interval](const EncodedEventPtr& ev) {
-    if (ev->kind == EventKind::State) mqtt_->state_topics.insert(ev->topic);
-    if (ev->kind == EventKind::Heartbeat) {
-      if (!heartbeats) return;
-      if (min_interval.count() > 0) {
-        auto* n = net(ev->network);
-        if (n != nullptr) {
-          const auto now = std::chrono::steady_clock::now();
-          auto [it, fresh] = n->last_heartbeat_published.try_emplace(ev->node, now);
-          if (!fresh) {
-            if (now - it->second < min_interval) return;
-            it->second = now;
-          }
-        }
-      }
-    }
-    pub->publish(ev);
-  });
-  pub->start();
-  // Where to look, for a person: the broker and the topics to subscribe to.
-  log_.info("MQTT: broker " + config_.mqtt.server_uri + ", topic prefix canopen/" + config_.gateway_id + "/ (subscribe to canopen/" +
-            config_.gateway_id + "/#)");
-}
-
-std::string App::status_payload(bool online) const {
-  GatewayStatusInfo status;
-  status.online = online;
-  status.version = CANOPEN_GATEWAY_VERSION;
-  status.node_id = nets_.empty() ? 127 : nets_.front()->cfg.node_id;
-  for (const auto& n : nets_) status.networks.push_back(n->number);
-  status.timestamp = std::chrono::system_clock::now();
-  status.uptime_ms = static_cast<std::uint64_t>(
-      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - started_at_).count());
-  auto e = encode_status(status, EncodeContext{config_.gateway_id});
-  return config_.mqtt.format == PayloadFormat::Protobuf ? e->binary : e->json;
-}
-
 void App::stop() {
   if (stopped_) return;
   stopped_ = true;
-  for (auto& n : nets_) {
-    if (n->link.simulator) n->link.simulator->stop();
-  }
+  for (auto& n : nets_) n->link.stop_simulation();
   // The CAN side closes: each network's last event says so (the retained
   // bus topic becomes `down`, cause link-down), in order behind the events
   // before it.
@@ -376,17 +297,9 @@ void App::stop() {
     down.cause = canopen::can::BusEventCause::LinkDown;
     n->network->report(down);
   }
-  if (mqtt_ && mqtt_->publisher) {
-    // No retained message may claim a node runs once the gateway is gone:
-    // its state topics are deleted (an empty retained message; not a state
-    // of the contract's list, which would be a claim about the node), and
-    // the offline status says when and after how long.
-    mqtt::MqttPublisher::Farewell last;
-    const auto qos = static_cast<std::uint8_t>(config_.mqtt.qos_for(EventKind::State));
-    for (const auto& topic : mqtt_->state_topics) last.messages.push_back({topic, std::string(), qos, true});
-    last.offline_payload = status_payload(false);
-    mqtt_->publisher->stop(std::chrono::seconds(2), last);
-  }
+  // No retained state may claim a node runs once the gateway is gone; the
+  // offline status says when and after how long (mqtt_output.hpp).
+  if (mqtt_) mqtt_->stop();
   for (auto& n : nets_) {
     n->driver.reset();
     if (n->link.socket) {

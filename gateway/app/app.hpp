@@ -33,6 +33,7 @@
 #include "event_message.hpp"
 #include "log.hpp"
 #include "pipeline.hpp"
+#include "registry.hpp"
 #include "state_cache.hpp"
 
 namespace canopen::eds {
@@ -61,8 +62,13 @@ struct PdoConfig;
 struct PdoReadReport;
 }
 
+namespace gateway::mqtt {
+class MqttPublisher;
+}
+
 namespace gateway {
 
+class MqttOutput;
 struct Composition;
 struct NetworkUnit;
 
@@ -82,7 +88,7 @@ class App {
   void start();
   // Each network's last event (bus `down`); MQTT: what is queued and the
   // window allows, the retained node states deleted, the offline status
-  // with the stop time and uptime (publisher.hpp, Farewell); CAN closed;
+  // with the stop time and uptime (mqtt_output.hpp); CAN closed;
   // each network's seq stored exactly (config.state_dir). Blocks the io
   // thread up to 2 s for MQTT. Afterwards the io_context runs out of work.
   void stop();
@@ -127,24 +133,9 @@ class App {
   std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const;
   // Frame counters of network `net`'s channel (for /metrics).
   std::optional<canopen::can::ChannelStats> channel_stats(std::uint32_t net) const;
-  // The MQTT publisher's counters; nullopt when MQTT is off.
-  struct MqttCounters {
-    bool connected = false;
-    std::uint64_t published = 0, acked = 0, dropped = 0, queue_depth = 0, queue_bytes = 0, reconnects = 0;
-    std::uint64_t requests_refused = 0;  // dropped unanswered for their reply address
-    // Storage (mqtt/outbound_queue.hpp, disk_queue.hpp).
-    std::uint64_t memory_depth = 0;      // messages waiting in memory
-    std::uint64_t spilled = 0;           // `outage` messages written to disk (broker away, memory full)
-    std::uint64_t storage_bytes = 0;     // bytes the queue wrote to its files
-    std::uint64_t storage_syncs = 0;     // its fdatasync calls
-    std::uint64_t storage_errors = 0;    // failed writes
-    bool storage_failing = false;        // writes failing now (disk full)
-    std::uint64_t corrupt_records = 0;   // skipped as corrupt at start
-    std::uint64_t corrupt_bytes = 0;
-    std::uint64_t stalls = 0;            // delivery restarts by the stall detector
-    std::map<std::string, std::uint64_t> dropped_by_reason;  // "storage_full" -> n
-  };
-  std::optional<MqttCounters> mqtt_counters() const;
+  // The MQTT publisher (e.g. tests: its counters); nullptr when MQTT is off
+  // or before start().
+  const mqtt::MqttPublisher* mqtt_publisher() const;
   // The PDO configuration the gateway uses for the described nodes of
   // network `net` (canopen::Network::pdo_config(): EDS/DCF, then what its
   // SDO writes changed and what was read from the devices); nullptr for an
@@ -167,9 +158,16 @@ class App {
   // unknown or real network.
   canopen::sim::Simulator* simulator(std::uint32_t net);
 
-  // The request counters and SDO latency histogram (/metrics, GET /api/v1/gateway).
+  // The request counters and SDO latency histogram (GET /api/v1/gateway).
   using Counters = core::Counters;
   const Counters& counters() const { return core_.counters(); }
+
+  // The process's metrics (/metrics). The App's components registered
+  // their families when it was built, in the order /metrics writes them:
+  // build info, the networks, the request core, events by kind, MQTT. The
+  // HTTP server and the uptime follow (register_metrics_route()). Render
+  // and register on the io thread only; the App MUST outlive every render().
+  metrics::Registry& metrics() { return metrics_; }
 
  private:
   using Net = NetworkUnit;
@@ -183,14 +181,12 @@ class App {
   void audit(const std::string& line);
   // The request core's view of the networks (core::Networks).
   struct CoreNetworks;
-  void start_mqtt();
-  // The gateway status (MQTT payload format) as of now: time and uptime.
-  std::string status_payload(bool online) const;
 
   boost::asio::io_context& io_;
   Config config_;
   Logger& log_;
   auth::TokenStore tokens_;
+  metrics::Registry metrics_;
   // Declared before nets_: SDO transfers that end while the networks are
   // torn down still find the core.
   std::unique_ptr<CoreNetworks> core_networks_;
@@ -201,9 +197,8 @@ class App {
   EventPipeline pipeline_;
   std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks
   std::vector<std::unique_ptr<Net>> nets_;
-  struct Mqtt;
-  std::unique_ptr<Mqtt> mqtt_;
   std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();
+  std::unique_ptr<MqttOutput> mqtt_;  // with MQTT on (config.mqtt.enabled)
   bool started_ = false;
   bool stopped_ = false;
 };

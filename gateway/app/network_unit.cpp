@@ -19,6 +19,22 @@ NetworkLink::NetworkLink(NetworkLink&&) noexcept = default;
 NetworkLink& NetworkLink::operator=(NetworkLink&&) noexcept = default;
 NetworkLink::~NetworkLink() = default;
 
+void NetworkLink::start_simulation() {
+  if (simulator) simulator->start();
+}
+
+void NetworkLink::stop_simulation() {
+  if (simulator) simulator->stop();
+}
+
+bool NetworkLink::set_simulated_link(bool up) {
+  if (!memory_gateway) return false;
+  memory_gateway->set_link_up(up);
+  return true;
+}
+
+canopen::can::MemoryBus* NetworkLink::simulated_bus() { return memory_bus ? &memory_bus->bus() : nullptr; }
+
 namespace {
 
 using canopen::can::Frame;

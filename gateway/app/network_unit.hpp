@@ -39,6 +39,10 @@ namespace canopen::socketcan {
 class SocketCanChannel;
 }
 
+namespace canopen::can {
+class MemoryBus;
+}
+
 namespace canopen::sim {
 class AsioMemoryBus;
 class AsioMemoryChannel;
@@ -55,6 +59,16 @@ struct NetworkLink {
   NetworkLink(NetworkLink&&) noexcept;
   NetworkLink& operator=(NetworkLink&&) noexcept;
   ~NetworkLink();
+
+  // A simulated network's devices start (boot-up, their producers) and
+  // stop; nothing for a real network.
+  void start_simulation();
+  void stop_simulation();
+  // A simulated network only: takes the gateway's side of the in-process
+  // bus down or up, as an interface going down would. False for a real one.
+  bool set_simulated_link(bool up);
+  // A simulated network's in-process bus; nullptr for a real one.
+  canopen::can::MemoryBus* simulated_bus();
 
   canopen::can::Channel* channel = nullptr;
   // A real network: the SocketCAN channel.
@@ -104,8 +118,6 @@ struct NetworkUnit {
   std::function<void(const canopen::can::BusEvent&)> on_bus_event;
 
   // The App's state per network.
-  // Per node: when the last heartbeat went to MQTT (rate limit).
-  std::map<std::uint8_t, std::chrono::steady_clock::time_point> last_heartbeat_published;
   std::optional<SeqStore> seq;  // the event sequence across restarts (from start())
 };
 

@@ -180,46 +180,6 @@ std::string TextWriter::str() const {
   return out;
 }
 
-// The gateway's families, registered per component from the snapshot; the
-// reads run at render() below, while `s` is alive.
-std::string render_metrics(const MetricsSnapshot& s) {
-  Registry r;
-  if (!s.version.empty()) register_build_info(r, s.version);
-  register_network_families(r);
-  for (const auto& n : s.networks) register_network(r, [&n] { return n; });
-  register_requests(
-      r,
-      [&s] {
-        return RequestMetrics{s.sdo_requests,        s.sdo_aborts,           s.sdo_timeouts, s.nmt_commands,
-                              s.request_auth_failures, s.requests_over_sdo_share, s.mqtt_requests_rate_limited};
-      },
-      s.sdo_latency_bounds,
-      s.sdo_latency_bounds.empty() ? std::function<HistogramValues()>{}
-                                   : [&s] { return HistogramValues{s.sdo_latency_counts, s.sdo_latency_sum}; });
-  register_events_by_kind(r, [&s] { return s.events_by_kind; });
-  if (s.mqtt_enabled)
-    register_mqtt(r, [&s] {
-      return MqttMetrics{s.mqtt_connected,       s.mqtt_published,      s.mqtt_acked,         s.mqtt_dropped,
-                         s.mqtt_queue_depth,     s.mqtt_queue_bytes,    s.mqtt_reconnects,    s.mqtt_requests_refused,
-                         s.mqtt_dropped_by_reason, s.mqtt_memory_depth, s.mqtt_spilled,       s.mqtt_storage_bytes,
-                         s.mqtt_storage_syncs,   s.mqtt_storage_errors, s.mqtt_storage_failing, s.mqtt_corrupt_records,
-                         s.mqtt_corrupt_bytes,   s.mqtt_stalls};
-    });
-  else
-    register_mqtt(r, {});
-  register_http_server(
-      r,
-      [&s] {
-        HttpServerMetrics m{s.ws_clients, s.ws_messages_sent, s.ws_messages_dropped, s.http_responses_by_status, {}};
-        if (s.http_connections) m.connections = *s.http_connections;
-        return m;
-      },
-      s.http_connections.has_value());
-  register_uptime(r, [&s] { return s.uptime_seconds; });
-  return r.render();
-}
-
-
 namespace {
 constexpr std::string_view kFrames = "canopen_gateway_can_frames_total";
 constexpr std::string_view kDropped = "canopen_gateway_can_frames_dropped_total";

@@ -1,16 +1,13 @@
 // Prometheus text exposition (format 0.0.4) for GET /metrics: a small,
 // dependency-free writer and the gateway's metric families. Each family's
 // name, help and labels are defined once, in the register_* function of the
-// component that owns it (below), on a Registry (registry.hpp). Two ways to
-// serve /metrics with kContentType:
-//   - register the live components once (http_metrics.hpp,
-//     pipeline_metrics.hpp, mqtt/mqtt_metrics.hpp, register_requests() for
-//     the request core) and serve Registry::render();
-//   - fill a MetricsSnapshot from the live parts and serve render_metrics(),
-//     which registers the same functions reading the snapshot.
+// component that owns it (below), on a Registry (registry.hpp): the live
+// components register once (pipeline_metrics.hpp, core/core_metrics.hpp,
+// mqtt/mqtt_metrics.hpp, http_metrics.hpp; the App holds the process's
+// registry) and /metrics serves Registry::render() with kContentType.
 //
-// TextWriter and render_metrics(): pure functions, thread-safe (no shared
-// state); the register_* functions: as the Registry.
+// TextWriter: no shared state (thread-safe per instance); the register_*
+// functions: as the Registry.
 #pragma once
 
 #include <cstdint>
@@ -120,56 +117,12 @@ struct HttpConnectionMetrics {
   std::uint64_t refused_framing = 0, refused_host = 0, refused_origin = 0, refused_media_type = 0;
 };
 
-struct MetricsSnapshot {
-  std::string version;  // build_info version label; empty = no build_info family
-  std::vector<NetworkMetrics> networks;
-  std::uint64_t sdo_requests = 0, sdo_aborts = 0, sdo_timeouts = 0;
-  std::uint64_t nmt_commands = 0;
-  // SDO transfer latency (submit to result, seconds): counts per upper bound,
-  // not cumulative, the last for slower ones (TextWriter::histogram). Empty
-  // bounds = no histogram family.
-  std::vector<double> sdo_latency_bounds;
-  std::vector<std::uint64_t> sdo_latency_counts;
-  double sdo_latency_sum = 0.0;
-  // Requests refused with 401/403 by the request handler (MQTT requests,
-  // NMT resets); the HTTP authorizer's refusals are in http_responses_by_status.
-  // nullopt = no such family.
-  std::optional<std::uint64_t> request_auth_failures;
-  // Requests the request handler answered 429 for their caller: over its
-  // share of a node's SDO queue, over the MQTT rate limit. nullopt = no such family.
-  std::optional<std::uint64_t> requests_over_sdo_share, mqtt_requests_rate_limited;
-  std::map<std::string, std::uint64_t> events_by_kind;  // "tpdo" -> n
-  bool mqtt_enabled = false;  // false: only canopen_gateway_mqtt_enabled 0 is written
-  bool mqtt_connected = false;
-  std::uint64_t mqtt_published = 0, mqtt_acked = 0, mqtt_dropped = 0;
-  std::uint64_t mqtt_queue_depth = 0, mqtt_queue_bytes = 0;
-  std::uint64_t mqtt_reconnects = 0;
-  std::uint64_t mqtt_requests_refused = 0;  // dropped unanswered for their reply address
-  // The MQTT queue's storage (mqtt/outbound_queue.hpp, disk_queue.hpp).
-  std::map<std::string, std::uint64_t> mqtt_dropped_by_reason;  // "storage_full" -> n
-  std::uint64_t mqtt_memory_depth = 0;
-  std::uint64_t mqtt_spilled = 0;
-  std::uint64_t mqtt_storage_bytes = 0, mqtt_storage_syncs = 0, mqtt_storage_errors = 0;
-  bool mqtt_storage_failing = false;
-  std::uint64_t mqtt_corrupt_records = 0, mqtt_corrupt_bytes = 0;
-  std::uint64_t mqtt_stalls = 0;
-  std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
-  std::map<int, std::uint64_t> http_responses_by_status;  // 200 -> n
-  std::optional<HttpConnectionMetrics> http_connections;   // nullopt = no such families
-  double uptime_seconds = 0.0;
-};
-
-// The whole /metrics body. Family order is fixed; series within a family
-// follow the snapshot's order (networks) or key order (maps). Built on the
-// registry with the register_* functions below, reading the snapshot.
-std::string render_metrics(const MetricsSnapshot& s);
-
 // ---- Registration per component (registry.hpp) ----------------------------
 // Each registers its families once, with the names, help and labels above;
 // `read` runs at every render() and MUST stay valid as long as the registry
-// renders. Today's /metrics order results from registering in the order
-// render_metrics() does: build info, network families, networks, services
-// (request core), events, MQTT, HTTP, uptime.
+// renders. /metrics writes the families in the order registered, which the
+// gateway keeps as it has always been: build info, network families,
+// networks, services (request core), events, MQTT, HTTP, uptime.
 
 class Registry;
 struct HistogramValues;
@@ -190,7 +143,7 @@ struct HttpServerMetrics {
   std::map<int, std::uint64_t> responses_by_status;  // 200 -> n
   HttpConnectionMetrics connections;
 };
-// with_connections false: no connection families (a snapshot without them).
+// with_connections false: no connection families.
 void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, bool with_connections = true);
 
 void register_uptime(Registry& r, std::function<double()> seconds);

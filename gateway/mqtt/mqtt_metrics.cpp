@@ -32,8 +32,11 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, const MqttReques
   return m;
 }
 
-void register_metrics(metrics::Registry& r, const MqttPublisher& publisher, const MqttRequests* requests) {
-  metrics::register_mqtt(r, [&publisher, requests] { return to_metrics(publisher, requests); });
+void register_metrics(metrics::Registry& r, const std::unique_ptr<MqttPublisher>& publisher,
+                      const std::unique_ptr<MqttRequests>& requests) {
+  metrics::register_mqtt(r, [&publisher, &requests] {
+    return publisher ? to_metrics(*publisher, requests.get()) : metrics::MqttMetrics{};
+  });
 }
 
 }  // namespace gateway::mqtt

@@ -39,7 +39,9 @@ namespace gateway {
 // Adds the routes above. `app` must outlive the server's use of them.
 void register_rest_routes(http::HttpServer& server, App& app);
 
-// GET /metrics: the App's and the server's counters in Prometheus text.
+// GET /metrics: app.metrics() rendered in Prometheus text, after adding
+// the server's families and the uptime to it. Call once per App; `app` and
+// `server` MUST outlive the server's use of the route.
 void register_metrics_route(http::HttpServer& server, App& app);
 // GET /api/v1/openapi.json: openapi_document() as application/json.
 void register_openapi_route(http::HttpServer& server);

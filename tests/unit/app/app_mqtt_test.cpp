@@ -11,6 +11,7 @@
 #include <set>
 
 #include "app.hpp"
+#include "mqtt/publisher.hpp"
 #include "unit/mqtt/mqtt_support.hpp"
 
 namespace gateway {
@@ -70,8 +71,8 @@ TEST(AppMqtt, BusTopicIsRetainedFromTheStartWithoutAStateChange) {
   });
   auto connected = [&] {
     return io.call([&] {
-      const auto c = app->mqtt_counters();
-      return c && c->connected && c->acked > 0;
+      const auto* p = app->mqtt_publisher();
+      return p != nullptr && p->counters().connected && p->counters().acked > 0;
     });
   };
   ASSERT_TRUE(eventually(connected)) << broker.log();

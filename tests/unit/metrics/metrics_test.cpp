@@ -1,11 +1,15 @@
 #include "metrics.hpp"
 
+#include "registry.hpp"
+
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -23,8 +27,88 @@ std::vector<std::string> lines_of(const std::string& text) {
   return out;
 }
 
-MetricsSnapshot full_snapshot() {
-  MetricsSnapshot s;
+// What the gateway's components report, as fixed values: each field feeds
+// the register_* function of the component that owns it.
+struct Values {
+  std::string version;  // build_info version label; empty = no build_info family
+  std::vector<NetworkMetrics> networks;
+  std::uint64_t sdo_requests = 0, sdo_aborts = 0, sdo_timeouts = 0;
+  std::uint64_t nmt_commands = 0;
+  // SDO transfer latency (submit to result, seconds): counts per upper bound,
+  // not cumulative, the last for slower ones (TextWriter::histogram). Empty
+  // bounds = no histogram family.
+  std::vector<double> sdo_latency_bounds;
+  std::vector<std::uint64_t> sdo_latency_counts;
+  double sdo_latency_sum = 0.0;
+  // Requests refused with 401/403 by the request handler (MQTT requests,
+  // NMT resets); the HTTP authorizer's refusals are in http_responses_by_status.
+  // nullopt = no such family.
+  std::optional<std::uint64_t> request_auth_failures;
+  // Requests the request handler answered 429 for their caller: over its
+  // share of a node's SDO queue, over the MQTT rate limit. nullopt = no such family.
+  std::optional<std::uint64_t> requests_over_sdo_share, mqtt_requests_rate_limited;
+  std::map<std::string, std::uint64_t> events_by_kind;  // "tpdo" -> n
+  bool mqtt_enabled = false;  // false: only canopen_gateway_mqtt_enabled 0 is written
+  bool mqtt_connected = false;
+  std::uint64_t mqtt_published = 0, mqtt_acked = 0, mqtt_dropped = 0;
+  std::uint64_t mqtt_queue_depth = 0, mqtt_queue_bytes = 0;
+  std::uint64_t mqtt_reconnects = 0;
+  std::uint64_t mqtt_requests_refused = 0;  // dropped unanswered for their reply address
+  // The MQTT queue's storage (mqtt/outbound_queue.hpp, disk_queue.hpp).
+  std::map<std::string, std::uint64_t> mqtt_dropped_by_reason;  // "storage_full" -> n
+  std::uint64_t mqtt_memory_depth = 0;
+  std::uint64_t mqtt_spilled = 0;
+  std::uint64_t mqtt_storage_bytes = 0, mqtt_storage_syncs = 0, mqtt_storage_errors = 0;
+  bool mqtt_storage_failing = false;
+  std::uint64_t mqtt_corrupt_records = 0, mqtt_corrupt_bytes = 0;
+  std::uint64_t mqtt_stalls = 0;
+  std::uint64_t ws_clients = 0, ws_messages_sent = 0, ws_messages_dropped = 0;
+  std::map<int, std::uint64_t> http_responses_by_status;  // 200 -> n
+  std::optional<HttpConnectionMetrics> http_connections;   // nullopt = no such families
+  double uptime_seconds = 0.0;
+};
+
+// The /metrics text for `s`: the families registered per component in the
+// order the gateway registers them (app.cpp, api_routes.cpp), reading `s`.
+std::string render(const Values& s) {
+  Registry r;
+  if (!s.version.empty()) register_build_info(r, s.version);
+  register_network_families(r);
+  for (const auto& n : s.networks) register_network(r, [&n] { return n; });
+  register_requests(
+      r,
+      [&s] {
+        return RequestMetrics{s.sdo_requests,        s.sdo_aborts,           s.sdo_timeouts, s.nmt_commands,
+                              s.request_auth_failures, s.requests_over_sdo_share, s.mqtt_requests_rate_limited};
+      },
+      s.sdo_latency_bounds,
+      s.sdo_latency_bounds.empty() ? std::function<HistogramValues()>{}
+                                   : [&s] { return HistogramValues{s.sdo_latency_counts, s.sdo_latency_sum}; });
+  register_events_by_kind(r, [&s] { return s.events_by_kind; });
+  if (s.mqtt_enabled)
+    register_mqtt(r, [&s] {
+      return MqttMetrics{s.mqtt_connected,       s.mqtt_published,      s.mqtt_acked,         s.mqtt_dropped,
+                         s.mqtt_queue_depth,     s.mqtt_queue_bytes,    s.mqtt_reconnects,    s.mqtt_requests_refused,
+                         s.mqtt_dropped_by_reason, s.mqtt_memory_depth, s.mqtt_spilled,       s.mqtt_storage_bytes,
+                         s.mqtt_storage_syncs,   s.mqtt_storage_errors, s.mqtt_storage_failing, s.mqtt_corrupt_records,
+                         s.mqtt_corrupt_bytes,   s.mqtt_stalls};
+    });
+  else
+    register_mqtt(r, {});
+  register_http_server(
+      r,
+      [&s] {
+        HttpServerMetrics m{s.ws_clients, s.ws_messages_sent, s.ws_messages_dropped, s.http_responses_by_status, {}};
+        if (s.http_connections) m.connections = *s.http_connections;
+        return m;
+      },
+      s.http_connections.has_value());
+  register_uptime(r, [&s] { return s.uptime_seconds; });
+  return r.render();
+}
+
+Values full_snapshot() {
+  Values s;
   s.version = "1.2.3";
   NetworkMetrics a;
   a.network = 1;
@@ -143,7 +227,7 @@ TEST(MetricsWriter, MisuseThrows) {
 }
 
 TEST(RenderMetrics, GoldenSmallSnapshot) {
-  MetricsSnapshot s;
+  Values s;
   NetworkMetrics n;
   n.network = 1;
   n.interface = "can0";
@@ -224,11 +308,11 @@ TEST(RenderMetrics, GoldenSmallSnapshot) {
       "# HELP canopen_gateway_uptime_seconds Seconds since the gateway started.\n"
       "# TYPE canopen_gateway_uptime_seconds gauge\n"
       "canopen_gateway_uptime_seconds 1.25\n";
-  EXPECT_EQ(render_metrics(s), expected);
+  EXPECT_EQ(render(s), expected);
 }
 
 TEST(RenderMetrics, MqttFamiliesWhenEnabled) {
-  const std::string text = render_metrics(full_snapshot());
+  const std::string text = render(full_snapshot());
   EXPECT_NE(text.find("canopen_gateway_mqtt_enabled 1\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_mqtt_connected 1\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_mqtt_messages_total{result=\"published\"} 40\n"), std::string::npos);
@@ -243,22 +327,22 @@ TEST(RenderMetrics, MqttFamiliesWhenEnabled) {
   EXPECT_NE(text.find("canopen_gateway_build_info{version=\"1.2.3\"} 1\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_bus_state{network=\"2\",interface=\"vcan\\\"x\\\\y\\nz\",state=\"bus-off\"} 1\n"),
             std::string::npos);
-  EXPECT_EQ(render_metrics(MetricsSnapshot{}).find("mqtt_connected"), std::string::npos);
+  EXPECT_EQ(render(Values{}).find("mqtt_connected"), std::string::npos);
 }
 
 // Issue 12: 429s for a caller's share of a node's SDO queue and for the
 // MQTT rate limit, one series each.
 TEST(RenderMetrics, RequestsLimitedPerCallerByReason) {
-  MetricsSnapshot s = full_snapshot();
+  Values s = full_snapshot();
   s.requests_over_sdo_share = 3;
   s.mqtt_requests_rate_limited = 7;
-  const std::string text = render_metrics(s);
+  const std::string text = render(s);
   EXPECT_NE(text.find("# HELP canopen_gateway_requests_limited_total Requests answered 429 for their caller"),
             std::string::npos);
   EXPECT_NE(text.find("# TYPE canopen_gateway_requests_limited_total counter\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_requests_limited_total{reason=\"sdo-queue-share\"} 3\n"), std::string::npos);
   EXPECT_NE(text.find("canopen_gateway_requests_limited_total{reason=\"mqtt-rate-limit\"} 7\n"), std::string::npos);
-  EXPECT_EQ(render_metrics(full_snapshot()).find("requests_limited"), std::string::npos);  // no App counters: no family
+  EXPECT_EQ(render(full_snapshot()).find("requests_limited"), std::string::npos);  // no App counters: no family
 }
 
 // Issue 12: what the MQTT queue's storage does (drops by reason, a full
@@ -275,7 +359,7 @@ TEST(RenderMetrics, MqttStorageFamilies) {
   s.mqtt_corrupt_records = 1;
   s.mqtt_corrupt_bytes = 29;
   s.mqtt_stalls = 0;
-  const std::string text = render_metrics(s);
+  const std::string text = render(s);
   for (const char* line :
        {"canopen_gateway_mqtt_dropped_total{reason=\"memory_full\"} 0\n",
         "canopen_gateway_mqtt_dropped_total{reason=\"queue_full\"} 3\n",
@@ -286,7 +370,7 @@ TEST(RenderMetrics, MqttStorageFamilies) {
         "canopen_gateway_mqtt_queue_corrupt_bytes_total 29\n", "canopen_gateway_mqtt_stalls_total 0\n",
         "# TYPE canopen_gateway_mqtt_storage_failing gauge\n", "# TYPE canopen_gateway_mqtt_dropped_total counter\n"})
     EXPECT_NE(text.find(line), std::string::npos) << line;
-  EXPECT_EQ(render_metrics(MetricsSnapshot{}).find("mqtt_storage"), std::string::npos);
+  EXPECT_EQ(render(Values{}).find("mqtt_storage"), std::string::npos);
 }
 
 // Checks the exposition the way a scraper would: every family has exactly one
@@ -333,16 +417,16 @@ TEST(ExpositionChecker, RejectsBadText) {
 }
 
 TEST(RenderMetrics, ParsesAsExposition) {
-  check_exposition(render_metrics(full_snapshot()));
-  MetricsSnapshot s = full_snapshot();
+  check_exposition(render(full_snapshot()));
+  Values s = full_snapshot();
   s.mqtt_enabled = false;
   s.uptime_seconds = 0.1;
-  check_exposition(render_metrics(s));
-  check_exposition(render_metrics(MetricsSnapshot{}));
+  check_exposition(render(s));
+  check_exposition(render(Values{}));
 }
 
 TEST(RenderMetrics, EveryFamilyHasHelpAndTypeOnce) {
-  const std::string text = render_metrics(full_snapshot());
+  const std::string text = render(full_snapshot());
   std::map<std::string, int> help, type;
   for (const auto& line : lines_of(text)) {
     if (line.rfind("# HELP ", 0) == 0) ++help[line.substr(7, line.find(' ', 7) - 7)];
@@ -366,7 +450,7 @@ TEST(RenderMetrics, EveryFamilyHasHelpAndTypeOnce) {
 }
 
 TEST(RenderMetrics, NoDuplicateSeriesAndOneBusStatePerNetwork) {
-  const std::string text = render_metrics(full_snapshot());
+  const std::string text = render(full_snapshot());
   std::set<std::string> series;
   int bus_ones = 0, bus_lines = 0;
   for (const auto& line : lines_of(text)) {
@@ -383,8 +467,8 @@ TEST(RenderMetrics, NoDuplicateSeriesAndOneBusStatePerNetwork) {
 }
 
 TEST(RenderMetrics, HttpConnectionFamiliesWhenGiven) {
-  MetricsSnapshot s;
-  EXPECT_EQ(render_metrics(s).find("canopen_gateway_http_connections"), std::string::npos);
+  Values s;
+  EXPECT_EQ(render(s).find("canopen_gateway_http_connections"), std::string::npos);
   HttpConnectionMetrics h;
   h.open = 40;
   h.idle = 7;
@@ -397,7 +481,7 @@ TEST(RenderMetrics, HttpConnectionFamiliesWhenGiven) {
   h.refused_origin = 6;
   h.refused_media_type = 8;
   s.http_connections = h;
-  const std::string text = render_metrics(s);
+  const std::string text = render(s);
   check_exposition(text);
   for (const char* line : {"canopen_gateway_http_connections{state=\"open\"} 40\n",
                            "canopen_gateway_http_connections{state=\"idle\"} 7\n",
@@ -415,9 +499,9 @@ TEST(RenderMetrics, HttpConnectionFamiliesWhenGiven) {
 }
 
 TEST(RenderMetrics, UnknownBusStateGivesAllZero) {
-  MetricsSnapshot s;
+  Values s;
   s.networks.push_back(NetworkMetrics{.network = 3, .interface = "can9", .bus_state = "weird"});
-  const std::string text = render_metrics(s);
+  const std::string text = render(s);
   EXPECT_EQ(text.find("canopen_gateway_bus_state{network=\"3\",interface=\"can9\",state=\"weird\""),
             std::string::npos);
   EXPECT_EQ(text.find("state=\"down\"} 0\n") != std::string::npos, true);
@@ -427,12 +511,12 @@ TEST(RenderMetrics, UnknownBusStateGivesAllZero) {
 // The SDO latency histogram: cumulative buckets with the bounds as %g, +Inf,
 // _sum and _count, between the NMT counter and the refusals.
 TEST(RenderMetrics, SdoLatencyHistogram) {
-  MetricsSnapshot s;
+  Values s;
   s.sdo_latency_bounds = {0.0005, 0.001, 2.5};
   s.sdo_latency_counts = {1, 0, 3, 2};
   s.sdo_latency_sum = 7.25;
   s.request_auth_failures = 0;
-  const std::string text = render_metrics(s);
+  const std::string text = render(s);
   const std::string expected =
       "# HELP canopen_gateway_sdo_latency_seconds SDO transfers from submission to result, queueing included.\n"
       "# TYPE canopen_gateway_sdo_latency_seconds histogram\n"
@@ -447,7 +531,7 @@ TEST(RenderMetrics, SdoLatencyHistogram) {
   EXPECT_LT(text.find("canopen_gateway_nmt_commands_total 0"), at);
   EXPECT_GT(text.find("# HELP canopen_gateway_request_auth_failures_total"), at);
   s.sdo_latency_counts.pop_back();  // one count per bound plus one, or a programming error
-  EXPECT_THROW(render_metrics(s), std::invalid_argument);
+  EXPECT_THROW(render(s), std::invalid_argument);
 }
 
 TEST(Metrics, ContentType) { EXPECT_EQ(kContentType, "text/plain; version=0.0.4; charset=utf-8"); }

@@ -469,5 +469,31 @@ TEST(Rest, MetricsWithSdoLatencyHistogram) {
   EXPECT_THAT(m.body, HasSubstr("canopen_gateway_request_auth_failures_total 0\n"));
 }
 
+// /metrics writes every family once, in the order it always has (each
+// component registers its own on the App's registry; the server's and the
+// uptime last), so scrapers and diffs of the text see no change.
+TEST(Rest, MetricsFamiliesInTheirOrder) {
+  RestRig rig;
+  auto m = rig.request("GET", "/metrics");
+  ASSERT_EQ(m.status, 200);
+  std::vector<std::string> families;
+  for (std::size_t at = m.body.find("# HELP "); at != std::string::npos; at = m.body.find("# HELP ", at + 1))
+    families.push_back(m.body.substr(at + 7, m.body.find(' ', at + 7) - at - 7));
+  const std::vector<std::string> expected = {
+      "canopen_gateway_build_info", "canopen_gateway_can_frames_total", "canopen_gateway_can_frames_dropped_total",
+      "canopen_gateway_can_error_frames_total", "canopen_gateway_can_reopens_total", "canopen_gateway_bus_state",
+      "canopen_gateway_network_events_total", "canopen_gateway_sdo_requests_total", "canopen_gateway_sdo_aborts_total",
+      "canopen_gateway_sdo_timeouts_total", "canopen_gateway_nmt_commands_total", "canopen_gateway_sdo_latency_seconds",
+      "canopen_gateway_request_auth_failures_total", "canopen_gateway_requests_limited_total",
+      "canopen_gateway_events_published_total", "canopen_gateway_mqtt_enabled", "canopen_gateway_websocket_clients",
+      "canopen_gateway_websocket_messages_total", "canopen_gateway_http_responses_total",
+      "canopen_gateway_http_connections", "canopen_gateway_http_connections_refused_total",
+      "canopen_gateway_http_connections_evicted_total", "canopen_gateway_http_header_timeouts_total",
+      "canopen_gateway_http_requests_refused_total", "canopen_gateway_uptime_seconds"};
+  EXPECT_EQ(families, expected);
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_mqtt_enabled 0\n"));
+  EXPECT_THAT(m.body, HasSubstr("canopen_gateway_bus_state{network=\"1\",interface=\"demo\",state=\"error-active\"} 1\n"));
+}
+
 }  // namespace
 }  // namespace gateway
