@@ -48,5 +48,7 @@ inline const pb::Payload::Metric* metric(const pb::Payload& p, std::string_view 
     if (m.name() == name) return &m;
   return nullptr;
 }
+// The metric would point into a destroyed temporary.
+const pb::Payload::Metric* metric(const pb::Payload&&, std::string_view) = delete;
 
 }  // namespace sparkplug_test
