@@ -67,11 +67,27 @@ struct Counter {
   void byte(std::uint8_t) { ++n; }
   void bytes(const void*, std::size_t len) { n += len; }
 };
+// Writes into room the caller made (resize by Counter's count first), so
+// no byte goes through std::string's capacity checks.
 struct Writer {
-  std::string& out;
-  void byte(std::uint8_t b) { out.push_back(static_cast<char>(b)); }
-  void bytes(const void* p, std::size_t len) { out.append(static_cast<const char*>(p), len); }
+  char* p;
+  void byte(std::uint8_t b) { *p++ = static_cast<char>(b); }
+  void bytes(const void* src, std::size_t len) {
+    if (len) std::memcpy(p, src, len);
+    p += len;
+  }
 };
+
+// Appends what `write(sink)` writes to `out`: counted first, then written in place.
+template <class F>
+void append(std::string& out, F&& write) {
+  Counter c;
+  write(c);
+  const std::size_t at = out.size();
+  out.resize(at + c.n);
+  Writer w{out.data() + at};
+  write(w);
+}
 
 template <class S>
 void varint(S& s, std::uint64_t v) {
@@ -190,22 +206,25 @@ void metric_body(S& s, const Metric& m, Form form) {
 }  // namespace
 
 void append_header(std::string& out, std::uint64_t timestamp) {
-  Writer w{out};
-  field_varint(w, kPayloadTimestamp, timestamp);
+  append(out, [&](auto& s) { field_varint(s, kPayloadTimestamp, timestamp); });
 }
 
 void append_metric(std::string& out, const Metric& m, Form form) {
-  Counter c;
-  metric_body(c, m, form);
-  Writer w{out};
+  Counter body;  // the body once for its length prefix, not again for the room
+  metric_body(body, m, form);
+  Counter prefix;
+  tag(prefix, kPayloadMetrics, kLen);
+  varint(prefix, body.n);
+  const std::size_t at = out.size();
+  out.resize(at + prefix.n + body.n);
+  Writer w{out.data() + at};
   tag(w, kPayloadMetrics, kLen);
-  varint(w, c.n);
+  varint(w, body.n);
   metric_body(w, m, form);
 }
 
 void append_seq(std::string& out, std::uint64_t seq) {
-  Writer w{out};
-  field_varint(w, kPayloadSeq, seq);
+  append(out, [&](auto& s) { field_varint(s, kPayloadSeq, seq); });
 }
 
 std::optional<Command> decode_command(std::string_view payload) {
