@@ -173,8 +173,9 @@ void EdgeSession::set_node_metrics(std::vector<Metric> metrics, std::vector<Outg
   if (state_ == State::Born) births(out, now);
 }
 
-void EdgeSession::device_online(std::vector<Outgoing>& out, std::string device_id, std::vector<Metric> metrics,
+bool EdgeSession::device_online(std::vector<Outgoing>& out, std::string device_id, std::vector<Metric> metrics,
                                 std::uint64_t now) {
+  if (device_id.empty() || device_id.find_first_of("+/#") != std::string::npos) return false;
   stamp(metrics, now);
   Device* d = find(device_id);
   if (!d) {
@@ -184,6 +185,7 @@ void EdgeSession::device_online(std::vector<Outgoing>& out, std::string device_i
   d->metrics = std::move(metrics);
   d->online = true;
   if (state_ == State::Born) dbirth(out, *d, now);
+  return true;
 }
 
 void EdgeSession::device_lost(std::vector<Outgoing>& out, std::string_view device_id, std::uint64_t now) {

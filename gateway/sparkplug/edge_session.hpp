@@ -138,7 +138,8 @@ class EdgeSession {
   void set_node_metrics(std::vector<Metric> metrics, std::vector<Outgoing>& out, std::uint64_t now);
   // A device is heard (again), or its metric set changed: DBIRTH now if
   // born, else with the next births. Its metrics as a whole (values current).
-  void device_online(std::vector<Outgoing>& out, std::string device_id, std::vector<Metric> metrics,
+  // False (and nothing done) for an id that is empty or holds '+', '/' or '#'.
+  bool device_online(std::vector<Outgoing>& out, std::string device_id, std::vector<Metric> metrics,
                      std::uint64_t now);
   // The device is lost: DDEATH if it was born in this session. Its metrics
   // are kept, for a later device_online() to replace.

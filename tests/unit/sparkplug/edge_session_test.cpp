@@ -432,12 +432,18 @@ TEST(EdgeSession, PrimaryHostOfflineEndsTheSessionUnlessStale) {
   EXPECT_EQ(bdseq_of(parse(out[0].payload)), 1);
 }
 
+// Spec ch4: ids must not contain '+', '/' or '#'.
 TEST(EdgeSession, IdsWithTopicCharactersAreRefused) {
   BdSeqStore s({});
   EXPECT_THROW(EdgeSession({"a/b", "gw1", ""}, s), std::invalid_argument);
   EXPECT_THROW(EdgeSession({"g", "gw+1", ""}, s), std::invalid_argument);
   EXPECT_THROW(EdgeSession({"g", "gw1", "h#"}, s), std::invalid_argument);
   EXPECT_THROW(EdgeSession({"", "gw1", ""}, s), std::invalid_argument);
+  EdgeSession ok({"g", "gw1", ""}, s);
+  std::vector<Outgoing> out;
+  EXPECT_FALSE(ok.device_online(out, "net1/node5", drive_metrics(), kT0));
+  EXPECT_FALSE(ok.device_online(out, "", drive_metrics(), kT0));
+  EXPECT_TRUE(ok.device_online(out, "net1-node5", drive_metrics(), kT0));
 }
 
 }  // namespace
