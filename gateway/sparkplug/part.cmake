@@ -1,0 +1,10 @@
+# Sparkplug B 3.0 edge node, sans-I/O (sparkplug/edge_session.hpp): the
+# payload writer and command decoder (payload.hpp, proto/sparkplug_b.proto),
+# the session state machine and the bdSeq kept in state-dir. The MQTT
+# connection and the CANopen side are wired in by the application.
+add_library(gateway_sparkplug STATIC
+  ${CMAKE_CURRENT_LIST_DIR}/payload.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/bdseq_store.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/edge_session.cpp)
+target_include_directories(gateway_sparkplug PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
+target_link_libraries(gateway_sparkplug PUBLIC canopen_core PRIVATE sparkplug_proto Boost::json canopen_options)
