@@ -9,12 +9,8 @@ SECONDS_=${2:-10}
 NETWORKS=${3:-16}
 RATE=${4:-8000}
 DIR=$(mktemp -d /tmp/many-networks.XXXXXX)
-PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
-printf 'listener %s 127.0.0.1\nallow_anonymous true\npersistence false\nmax_queued_messages 0\n' "$PORT" > "$DIR/m.conf"
-/usr/sbin/mosquitto -c "$DIR/m.conf" > "$DIR/m.log" 2>&1 &
-MOSQ=$!
-trap 'kill $MOSQ 2>/dev/null; wait $MOSQ 2>/dev/null; rm -rf "$DIR"' EXIT
-for _ in $(seq 50); do mosquitto_pub -h 127.0.0.1 -p "$PORT" -t probe -m x 2>/dev/null && break; sleep 0.1; done
+. "$(dirname "$0")/broker.sh"
+start_broker "$DIR"
 ticks() { awk '{print $14 + $15}' "/proc/$MOSQ/stat"; }
 t0=$(ticks)
 rc=0

@@ -8,12 +8,8 @@ BUILD=${1:?usage: mqtt_compare.sh BUILD_DIR [EVENTS] [QOS]}
 EVENTS=${2:-100000}
 QOS=${3:-1}
 DIR=$(mktemp -d /tmp/mqtt-compare.XXXXXX)
-PORT=$(/usr/bin/python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])')
-printf 'listener %s 127.0.0.1\nallow_anonymous true\npersistence false\nmax_queued_messages 0\n' "$PORT" > "$DIR/m.conf"
-/usr/sbin/mosquitto -c "$DIR/m.conf" > "$DIR/m.log" 2>&1 &
-MOSQ=$!
-trap 'kill $MOSQ 2>/dev/null; wait $MOSQ 2>/dev/null; rm -rf "$DIR"' EXIT
-for _ in $(seq 50); do mosquitto_pub -h 127.0.0.1 -p "$PORT" -t probe -m x 2>/dev/null && break; sleep 0.1; done
+. "$(dirname "$0")/broker.sh"
+start_broker "$DIR"
 "$BUILD/bench/mqtt_path_bench" "tcp://127.0.0.1:$PORT" "$EVENTS" "$DIR/queue" "$QOS" | tee "$DIR/gw.txt"
 /usr/bin/python3 "$(dirname "$0")/python_bridge.py" 127.0.0.1 "$PORT" "$EVENTS" "$QOS" | tee "$DIR/py.txt"
 gw=$(grep -oP 'CPU per event \(all threads, until acked\): \K[0-9.]+' "$DIR/gw.txt")
