@@ -5,7 +5,7 @@
 //
 // File <state-dir>/sparkplug-bdseq: the bdSeq of the latest CONNECT, 0..255
 // in decimal, and a newline. next() writes the new value durably (temp file,
-// fsync, rename, fsync of the directory, as gateway/app/seq_store does)
+// fsync, rename, fsync of the directory: gateway/state_file.hpp)
 // before it returns, i.e. before the CONNECT that carries it in its Will is
 // sent: a crash at any point leaves either the old or the new value, so the
 // next run never reuses a bdSeq a broker may already hold as a Will.

@@ -7,4 +7,4 @@ add_library(gateway_sparkplug STATIC
   ${CMAKE_CURRENT_LIST_DIR}/bdseq_store.cpp
   ${CMAKE_CURRENT_LIST_DIR}/edge_session.cpp)
 target_include_directories(gateway_sparkplug PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
-target_link_libraries(gateway_sparkplug PUBLIC canopen_core PRIVATE sparkplug_proto Boost::json canopen_options)
+target_link_libraries(gateway_sparkplug PUBLIC canopen_core PRIVATE gateway_lib sparkplug_proto Boost::json canopen_options)
