@@ -75,10 +75,30 @@ std::string timestamp_text(WallTime t) {
   return out;
 }
 
-// Network and node from the path: nullopt when fine, else the error response.
-std::optional<Response> check_net(const App& app, const Request& req, std::uint32_t& net, bool protobuf = false) {
+// The network of the path, or the detail of its 400 (not a number).
+std::optional<std::uint32_t> path_network(const Request& req, std::string& error) {
   auto n = parse_decimal(req.param("net"));
-  if (!n) return problem_response(400, "network must be a decimal number, not '" + std::string(req.param("net")) + "'", protobuf);
+  if (!n) error = "network must be a decimal number, not '" + std::string(req.param("net")) + "'";
+  return n;
+}
+
+// The node of the path, or the detail of its 400.
+std::optional<std::uint8_t> path_node(const Request& req, bool allow_zero, std::string& error) {
+  auto n = parse_decimal(req.param("node"));
+  if (!n || *n > 127 || (*n == 0 && !allow_zero)) {
+    error = "node-ID must be " + std::string(allow_zero ? "0..127" : "1..127") + ", not '" +
+            std::string(req.param("node")) + "'";
+    return std::nullopt;
+  }
+  return static_cast<std::uint8_t>(*n);
+}
+
+// Network and node from the path for the routes the request core does not
+// serve: nullopt when fine, else the error response.
+std::optional<Response> check_net(const App& app, const Request& req, std::uint32_t& net, bool protobuf = false) {
+  std::string error;
+  auto n = path_network(req, error);
+  if (!n) return problem_response(400, error, protobuf);
   if (*n == 0 || *n > app.config().networks.size())
     return problem_response(404,
                             "network " + std::to_string(*n) + " is not configured (networks are 1.." +
@@ -89,13 +109,10 @@ std::optional<Response> check_net(const App& app, const Request& req, std::uint3
 }
 
 std::optional<Response> check_node(const Request& req, std::uint8_t& node, bool allow_zero, bool protobuf = false) {
-  auto n = parse_decimal(req.param("node"));
-  if (!n || *n > 127 || (*n == 0 && !allow_zero))
-    return problem_response(400,
-                            "node-ID must be " + std::string(allow_zero ? "0..127" : "1..127") + ", not '" +
-                                std::string(req.param("node")) + "'",
-                            protobuf);
-  node = static_cast<std::uint8_t>(*n);
+  std::string error;
+  auto n = path_node(req, allow_zero, error);
+  if (!n) return problem_response(400, error, protobuf);
+  node = *n;
   return std::nullopt;
 }
 
@@ -354,21 +371,10 @@ core::Caller rest_caller(const Request& req) {
 // The network of the path: its number (the core checks that it exists), or
 // the 400 for one that is not a number.
 std::optional<std::uint32_t> path_network(const Request& req, Responder& respond, bool protobuf = false) {
-  auto n = parse_decimal(req.param("net"));
-  if (!n) respond(problem_response(400, "network must be a decimal number, not '" + std::string(req.param("net")) + "'",
-                                   protobuf));
+  std::string error;
+  auto n = path_network(req, error);
+  if (!n) respond(problem_response(400, error, protobuf));
   return n;
-}
-
-// The node of the path, or the detail of its 400.
-std::optional<std::uint8_t> path_node(const Request& req, bool allow_zero, std::string& error) {
-  auto n = parse_decimal(req.param("node"));
-  if (!n || *n > 127 || (*n == 0 && !allow_zero)) {
-    error = "node-ID must be " + std::string(allow_zero ? "0..127" : "1..127") + ", not '" +
-            std::string(req.param("node")) + "'";
-    return std::nullopt;
-  }
-  return static_cast<std::uint8_t>(*n);
 }
 
 core::Request core_request(const Request& req, std::uint32_t net, core::Command command) {
