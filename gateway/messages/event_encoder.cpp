@@ -433,6 +433,8 @@ std::string node_topic(const EncodeContext& ctx, std::uint32_t network, std::uin
   return t;
 }
 
+std::string status_topic(std::string_view gateway_id) { return "canopen/" + std::string(gateway_id) + "/status"; }
+
 std::string network_topic(const EncodeContext& ctx, std::uint32_t network, std::string_view leaf) {
   std::string t;
   t.reserve(20 + ctx.gateway_id.size() + leaf.size());
@@ -458,8 +460,7 @@ EncodedEventPtr encode_event(const canopen::Event& ev, std::uint32_t network, co
 EncodedEventPtr encode_status(const GatewayStatusInfo& s, const EncodeContext& ctx) {
   Header h;
   h.time = detail::to_unix_time(s.timestamp);
-  std::string topic = "canopen/" + ctx.gateway_id + "/status";
-  auto e = make(EventKind::Status, h, std::move(topic), true);
+  auto e = make(EventKind::Status, h, status_topic(ctx.gateway_id), true);
   pb::GatewayStatus m;
   h.set(m);
   m.set_state(s.online ? "online" : "offline");

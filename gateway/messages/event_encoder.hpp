@@ -76,6 +76,8 @@ EncodedEventPtr encode_status(const GatewayStatusInfo& status, const EncodeConte
 // Topic builders (the same strings encode_event uses).
 std::string node_topic(const EncodeContext& ctx, std::uint32_t network, std::uint8_t node, std::string_view leaf);
 std::string network_topic(const EncodeContext& ctx, std::uint32_t network, std::string_view leaf);
+// canopen/<gateway_id>/status: the retained status and the MQTT Will.
+std::string status_topic(std::string_view gateway_id);
 // "1A5" for 11-bit CAN-IDs, "1ABCDEF0" (8 digits) for 29-bit ones.
 std::string cob_id_topic_level(std::uint32_t cob_id);
 

@@ -1,5 +1,7 @@
 #include "mqtt/publisher.hpp"
 
+#include "event_encoder.hpp"
+
 #include "mqtt/mqtt_codec.hpp"
 #include "mqtt/mqtt_connection.hpp"
 #include "mqtt/session.hpp"
@@ -64,7 +66,7 @@ Session::Options session_options(const MqttConfig& c) {
   o.client_id = c.client_id;
   o.username = c.username;
   o.password = c.password;
-  o.will_topic = "canopen/" + c.gateway_id + "/status";
+  o.will_topic = gateway::status_topic(c.gateway_id);
   o.will_payload = c.offline_payload;
   o.keepalive = c.keepalive;
   o.connect_timeout = c.connect_timeout;
@@ -84,7 +86,6 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     for (const auto& w : queue.disk().take_warnings()) log.warn("mqtt: queue: " + w);
     uri = normalize_server_uri(cfg.server_uri);
     endpoint = parse_endpoint(uri);
-    prefix = "canopen/" + cfg.gateway_id + "/";
   }
 
   asio::io_context& io;
@@ -100,7 +101,6 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   std::string uri;
   Endpoint endpoint;
   std::unique_ptr<asio::ssl::context> tls_ctx;
-  std::string prefix;
   asio::steady_timer session_timer;  // at session.deadline()
   Session session;
   std::shared_ptr<MqttConnection> conn;
@@ -117,7 +117,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   std::string scratch;                       // stop()'s last packets
   Counters counters;
 
-  std::string status_topic() const { return prefix + "status"; }
+  std::string status_topic() const { return gateway::status_topic(cfg.gateway_id); }
 
   void start() {
     if (running) return;
