@@ -58,9 +58,14 @@ TEST(HttpMetrics, RegisteredFamiliesFollowTheServer) {
     asio::read(sock, asio::dynamic_buffer(reply), ec);  // until the server closes
     EXPECT_EQ(reply.substr(0, 12), "HTTP/1.1 200");
   }
-  // The count is taken when the response is written; wait for it, bounded.
-  for (int i = 0; i < 500 && server.stats().responses_by_status.empty(); ++i)
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  // The count is taken when the response is written and the connection is
+  // closed after it, on the io thread: wait for both (bounded), so the
+  // snapshot below and the render after it see the same, settled stats.
+  const auto settled = [&] {
+    const HttpStats s = server.stats();
+    return !s.responses_by_status.empty() && s.connections_active == 0;
+  };
+  for (int i = 0; i < 500 && !settled(); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   const HttpStats stats = server.stats();
   metrics::HttpServerMetrics after;
   after.responses_by_status = stats.responses_by_status;
