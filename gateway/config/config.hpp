@@ -48,6 +48,15 @@ struct BootConfig {
   std::optional<bool> read_pdo_config;
 };
 
+// An object listed in a node's `sparkplug-metrics` ("2300h", "6060h:0"):
+// read by SDO for the node's Sparkplug DBIRTH. No sub-index: every
+// sub-object of a record/array in the EDS (sub 0 for a variable).
+struct SparkplugObject {
+  std::uint16_t index = 0;
+  std::optional<std::uint8_t> sub;
+  friend bool operator==(const SparkplugObject&, const SparkplugObject&) = default;
+};
+
 struct NodeConfig {
   std::uint8_t id = 0;
   std::string name;     // optional; shown in the API and dashboard
@@ -59,6 +68,7 @@ struct NodeConfig {
   std::optional<std::chrono::milliseconds> heartbeat_consumer;
   GuardingConfig guarding;
   std::optional<BootConfig> boot;  // nullopt: only watch the node
+  std::vector<SparkplugObject> sparkplug_metrics;  // contract "Sparkplug B"
 };
 
 struct SyncConfig {
@@ -117,6 +127,23 @@ struct MqttConfig : mqtt::MqttConfig {
   std::optional<Role> requests_role;
 };
 
+// The Sparkplug B edge node (contract "Sparkplug B"): its own MQTT session
+// (own client id, NDEATH as its Will) to mqtt.uri's broker unless `uri`
+// says otherwise. Connection settings left empty come from `mqtt`.
+struct SparkplugConfig {
+  bool enabled = false;          // --sparkplug GROUP_ID or sparkplug.group-id
+  std::string origin;            // "--sparkplug G", "gw.yaml:40: sparkplug.group-id" (messages)
+  std::string group_id;          // no '+', '/', '#'
+  std::string edge_node_id;      // "" = the gateway id (merge() fills it in)
+  std::string primary_host_id;   // "" = none
+  bool aliases = false;          // sparkplug.aliases
+  Role commands_role = Role::Operator;  // sparkplug.commands-role; None ignores NCMD/DCMD writes
+  // The MQTT connection: server_uri "" = mqtt's; client_id default
+  // "canopen-gateway-<gateway id>-spb"; username/password/TLS as mqtt's
+  // unless given here. gateway_id and the status payloads are unused.
+  mqtt::MqttConfig mqtt;
+};
+
 struct TokenConfig {
   std::string name;    // who, in the audit log
   Role role = Role::Viewer;
@@ -162,6 +189,7 @@ struct Config {
   std::vector<NetworkConfig> networks;  // numbered from 1 in this order
   MqttConfig mqtt;
   HttpConfig http;
+  SparkplugConfig sparkplug;
 };
 
 // Parses YAML text; `file` is used in error messages only. Relative file
