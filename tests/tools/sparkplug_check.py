@@ -243,9 +243,11 @@ class Checker:
         counting = self.line_no > self.args.from_line
         if counting:
             self.counts[mtype] = self.counts.get(mtype, 0) + 1
-        if self.args.decode:
+        self.check(topic, group, mtype, edge, device, p, qos, retain, recv_time, counting)
+        if self.args.decode:  # after the checks: DATA values typed as their birth says
             self.emit(self.describe(topic, mtype, device, p, qos, retain))
 
+    def check(self, topic, group, mtype, edge, device, p, qos, retain, recv_time, counting):
         # QoS and retain per message type (facts A.3).
         want_qos = 1 if mtype == "NDEATH" else 0
         if qos != want_qos or retain:
@@ -335,6 +337,8 @@ class Checker:
         st.node_metrics = names["names"]
         st.node_aliases = names["aliases"]
         self.register_aliases(topic, st, "", names["aliases"])
+        if self.line_no > self.args.from_line:
+            self.birth_metrics.update(("", n) for n in names["names"])
 
     def dbirth(self, topic, st, device, p, counting):
         names = self.birth_metrics_check(topic, p, device=device)
@@ -348,8 +352,7 @@ class Checker:
         st.pending.discard(device)
         if counting:
             self.dbirth_devices.add(device)
-            for n in names["names"]:
-                self.birth_metrics.add((device, n))
+            self.birth_metrics.update((device, n) for n in names["names"])
 
     def ndeath(self, topic, st, key, p):
         if p.HasField("seq"):
@@ -520,8 +523,8 @@ class Checker:
                 self.violation("value-type", topic, "%r born as datatype %d, DATA says %d" % (name, dt, m.datatype))
             m.datatype = dt  # for metric_value(): the born type
             self.check_value(topic, m, dt, repr(name), birth=False)
-            if counting and device is not None:
-                self.data_seen.append((device, name, metric_value(m)))
+            if counting:
+                self.data_seen.append((device or "", name, metric_value(m)))
 
     def describe(self, topic, mtype, device, p, qos, retain):
         d = {"event": "message", "line": self.line_no, "type": mtype, "topic": topic, "qos": qos,
@@ -537,6 +540,10 @@ class Checker:
                                            ("datatype", m.datatype if m.HasField("datatype") else None),
                                            ("value", metric_value(m)))
                          if v is not None or k == "value"} for m in p.metrics]
+        for m, out in zip(p.metrics, d["metrics"]):
+            for key, v in zip(m.properties.keys, m.properties.values):
+                if key in ("index", "subIndex") and v.WhichOneof("value") == "int_value":
+                    out[key] = v.int_value
         return d
 
     # ---- expectations ----------------------------------------------------
@@ -552,12 +559,12 @@ class Checker:
         for spec in a.expect_birth_metric:
             dev, _, name = spec.partition("/")
             if (dev, name) not in self.birth_metrics:
-                out.append("no DBIRTH of %s with metric %r" % (dev, name))
+                out.append("no %s with metric %r" % ("DBIRTH of " + dev if dev else "NBIRTH", name))
         for spec in a.expect_data:
             dev, _, rest = spec.partition("/")
             name, eq, want = rest.rpartition("=") if "=" in rest else (rest, "", "")
             if not any(d == dev and n == name and (not eq or value_matches(v, want)) for d, n, v in self.data_seen):
-                out.append("no DDATA of %s with %r%s" % (dev, name, "=" + want if eq else ""))
+                out.append("no %s with %r%s" % ("DDATA of " + dev if dev else "NDATA", name, "=" + want if eq else ""))
         return out
 
     def summary(self):
@@ -668,9 +675,9 @@ def main(argv=None):
     g.add_argument("--expect-ndeath", action="store_true", help="same as --min-ndeaths 1")
     g.add_argument("--expect-dbirth", action="append", default=[], metavar="DEVICE")
     g.add_argument("--expect-birth-metric", action="append", default=[], metavar="DEVICE/METRIC",
-                   help="a DBIRTH of DEVICE has the metric")
+                   help="a DBIRTH of DEVICE has the metric (DEVICE empty: an NBIRTH)")
     g.add_argument("--expect-data", action="append", default=[], metavar="DEVICE/METRIC[=VALUE]",
-                   help="a DDATA of DEVICE carries the metric (with that value)")
+                   help="a DDATA of DEVICE carries the metric, with that value if given (DEVICE empty: NDATA)")
     args = ap.parse_args(argv)
     if args.expect_ndeath:
         args.min_ndeaths = max(args.min_ndeaths, 1)

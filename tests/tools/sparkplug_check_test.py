@@ -191,7 +191,9 @@ class CheckerTest(unittest.TestCase):
         rc, violations, s = self.run_checker(b.lines, "--min-nbirths", "3", "--min-dbirths", "6", "--expect-ndeath",
                                              "--expect-dbirth", "pump", "--expect-data", "pump/Speed=42",
                                              "--expect-data", "net1-node5/Speed=-7",
-                                             "--expect-birth-metric", "net1-node5/Serial")
+                                             "--expect-birth-metric", "net1-node5/Serial",
+                                             "--expect-birth-metric", "/Network 1/Bus State",
+                                             "--expect-data", "/Network 1/Bus State=error-passive")
         self.assertEqual((rc, violations, s["unmet"]), (0, [], []))
         self.assertEqual(s["sessions"], {G + "/" + E: [0, 1]})
         self.assertEqual(s["counts"]["NDEATH"], 3)
@@ -210,6 +212,21 @@ class CheckerTest(unittest.TestCase):
         b.ndeath(255)
         b.nbirth(0)
         self.assertEqual(self.run_checker(b.lines)[0], 0)
+
+    def test_decode_shows_values_typed_and_the_canopen_address(self):
+        b = Builder(self.pb)
+        b.nbirth(0)
+        b.dbirth("pump")
+        b.ddata("pump", -300)
+        rc, _, _ = self.run_checker(b.lines)
+        path = os.path.join(self.tmp.name, "capture.txt")
+        r = subprocess.run([sys.executable, CHECKER, "--capture", path, "--decode"], capture_output=True, text=True)
+        msgs = [e for e in map(json.loads, r.stdout.splitlines()) if e["event"] == "message"]
+        self.assertEqual([m["type"] for m in msgs], ["NBIRTH", "DBIRTH", "DDATA"])
+        speed = msgs[1]["metrics"][0]
+        self.assertEqual((speed["name"], speed["index"], speed["subIndex"], speed["value"]), ("Speed", 0x6000, 1, -5))
+        self.assertEqual(msgs[2]["metrics"][0]["value"], -300)  # Int16 two's complement (facts A.7)
+        self.assertEqual(msgs[2]["seq"], 2)
 
     def test_an_unmet_expectation_exits_2_and_says_which(self):
         rc, violations, s = self.run_checker(self.good().lines, "--min-dbirths", "99",
