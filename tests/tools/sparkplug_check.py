@@ -182,6 +182,7 @@ class Checker:
         self.birth_metrics = set()   # (device, name) seen in a DBIRTH (from --from-line on)
         self.data_seen = []          # (device, name, value) of DDATA metrics (from --from-line on)
         self.sessions = {}           # "G/E" -> [bdSeq of each NBIRTH that opened a session]
+        self.objects = {}            # (device, (index, subIndex)) -> (name, datatype), latest DBIRTH
         self.out = sys.stdout
 
     # ---- reporting -------------------------------------------------------
@@ -443,7 +444,9 @@ class Checker:
                 aliases[m.alias] = m.name
             names[m.name] = m.datatype
             if device is not None:
-                self.check_properties(topic, m)
+                obj = self.check_properties(topic, m)
+                if obj is not None:
+                    self.objects[(device, obj)] = (m.name, m.datatype)
         return {"names": names, "aliases": aliases}
 
     def check_value(self, topic, m, datatype, label, birth):
@@ -463,6 +466,7 @@ class Checker:
             self.violation("value-type", topic, "%s: %d does not fit datatype %d" % (label, m.int_value, datatype))
 
     def check_properties(self, topic, m):
+        """Checks a device metric's properties; returns its (index, subIndex) if it has them."""
         keys = list(m.properties.keys)
         vals = list(m.properties.values)
         if len(keys) != len(vals):
@@ -470,8 +474,12 @@ class Checker:
             return
         props = dict(zip(keys, vals))
         is_object = m.name not in NON_OBJECT_DEVICE_METRICS or "index" in props or "subIndex" in props
+        q = props.get("Quality")
+        if q is not None and q.type != INT32:
+            self.violation("properties", topic, "%r: property Quality must be Int32 (facts A.7)" % m.name)
         if not is_object:
-            return
+            return None
+        address = []
         for key, want_type, limit in (("index", UINT16, 0xFFFF), ("subIndex", UINT8, 0xFF)):
             v = props.get(key)
             if v is None:
@@ -479,9 +487,9 @@ class Checker:
             elif v.type != want_type or v.WhichOneof("value") != "int_value" or v.int_value > limit:
                 self.violation("properties", topic, "object metric %r: property %r must be datatype %d in int_value"
                                % (m.name, key, want_type))
-        q = props.get("Quality")
-        if q is not None and q.type != INT32:
-            self.violation("properties", topic, "%r: property Quality must be Int32 (facts A.7)" % m.name)
+            else:
+                address.append(v.int_value)
+        return tuple(address) if len(address) == 2 else None
 
     def register_aliases(self, topic, st, device, aliases):
         for alias, name in aliases.items():
@@ -560,12 +568,26 @@ class Checker:
             dev, _, name = spec.partition("/")
             if (dev, name) not in self.birth_metrics:
                 out.append("no %s with metric %r" % ("DBIRTH of " + dev if dev else "NBIRTH", name))
-        for spec in a.expect_data:
-            dev, _, rest = spec.partition("/")
+        for spec in a.expect_birth_object:
+            dev, obj = parse_object(spec)
+            if (dev, obj) not in self.objects:
+                out.append("no DBIRTH of %s with a metric for %04Xh:%d" % (dev, obj[0], obj[1]))
+        specs = [(spec, spec.partition("/")[0], spec.partition("/")[2]) for spec in a.expect_data]
+        for spec in a.expect_data_object:
+            dev, obj = parse_object(spec.partition("=")[0])
+            name = self.objects.get((dev, obj), ("%04Xh:%d (not born)" % obj,))[0]
+            specs.append((spec, dev, name + spec[len(spec.partition("=")[0]):]))
+        for spec, dev, rest in specs:
             name, eq, want = rest.rpartition("=") if "=" in rest else (rest, "", "")
             if not any(d == dev and n == name and (not eq or value_matches(v, want)) for d, n, v in self.data_seen):
-                out.append("no %s with %r%s" % ("DDATA of " + dev if dev else "NDATA", name, "=" + want if eq else ""))
+                out.append("no %s with %r%s (%s)" % ("DDATA of " + dev if dev else "NDATA", name,
+                                                     "=" + want if eq else "", spec))
         return out
+
+    def lookup(self, spec):
+        """'NAME=TYPE' of the metric born for DEVICE/INDEXh:SUB, or None."""
+        found = self.objects.get(parse_object(spec))
+        return None if found is None else "%s=%s" % (found[0], self.pb.DataType.Name(found[1]))
 
     def summary(self):
         unmet = self.unmet()
@@ -575,6 +597,14 @@ class Checker:
              "sessions": self.sessions, "devices": sorted(self.dbirth_devices)}
         self.emit(s)
         return s
+
+
+def parse_object(spec):
+    """'DEVICE/6200h:1' (or 0x6200:1) -> (device, (0x6200, 1))."""
+    dev, _, obj = spec.rpartition("/")
+    index, _, sub = obj.partition(":")
+    index = int(index[:-1], 16) if index.lower().endswith("h") else int(index, 0)
+    return dev, (index, int(sub or "0", 0))
 
 
 # ---- running -------------------------------------------------------------
@@ -678,6 +708,13 @@ def main(argv=None):
                    help="a DBIRTH of DEVICE has the metric (DEVICE empty: an NBIRTH)")
     g.add_argument("--expect-data", action="append", default=[], metavar="DEVICE/METRIC[=VALUE]",
                    help="a DDATA of DEVICE carries the metric, with that value if given (DEVICE empty: NDATA)")
+    g.add_argument("--expect-birth-object", action="append", default=[], metavar="DEVICE/INDEXh:SUB",
+                   help="a DBIRTH of DEVICE has a metric for that object (properties index, subIndex)")
+    g.add_argument("--expect-data-object", action="append", default=[], metavar="DEVICE/INDEXh:SUB[=VALUE]",
+                   help="a DDATA of DEVICE carries the metric born for that object, with that value if given")
+    ap.add_argument("--lookup", metavar="DEVICE/INDEXh:SUB",
+                    help="(with --capture) print NAME=DATATYPE of the metric born for that object and exit "
+                         "(status 2: none)")
     args = ap.parse_args(argv)
     if args.expect_ndeath:
         args.min_ndeaths = max(args.min_ndeaths, 1)
@@ -689,9 +726,17 @@ def main(argv=None):
             print("sparkplug_check: cannot generate the decoder from %s: %s" % (args.proto, e), file=sys.stderr)
             return 3
         chk = Checker(pb, args)
+        if args.lookup:
+            chk.out = sys.stderr  # stdout is the answer alone
         try:
             if args.capture:
                 run_capture(chk, args.capture)
+                if args.lookup:
+                    found = chk.lookup(args.lookup)
+                    if found is None:
+                        return 2
+                    print(found)
+                    return 0
             else:
                 rc = run_live(chk, args)
                 if rc is not None:

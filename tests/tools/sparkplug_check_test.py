@@ -228,6 +228,25 @@ class CheckerTest(unittest.TestCase):
         self.assertEqual(msgs[2]["metrics"][0]["value"], -300)  # Int16 two's complement (facts A.7)
         self.assertEqual(msgs[2]["seq"], 2)
 
+    def test_objects_by_their_canopen_address(self):
+        b = Builder(self.pb)
+        b.nbirth(0)
+        b.dbirth("pump")
+        b.ddata("pump", 12)
+        rc, violations, s = self.run_checker(b.lines, "--expect-birth-object", "pump/6200h:0",
+                                             "--expect-data-object", "pump/0x6000:1=12")
+        self.assertEqual((rc, s["unmet"]), (0, []))
+        rc, _, s = self.run_checker(b.lines, "--expect-birth-object", "pump/6200h:1",
+                                    "--expect-data-object", "pump/6000h:1=13")
+        self.assertEqual((rc, len(s["unmet"])), (2, 2))
+        path = os.path.join(self.tmp.name, "capture.txt")
+        r = subprocess.run([sys.executable, CHECKER, "--capture", path, "--lookup", "pump/6000h:1"],
+                           capture_output=True, text=True)
+        self.assertEqual((r.returncode, r.stdout), (0, "Speed=Int16\n"))
+        r = subprocess.run([sys.executable, CHECKER, "--capture", path, "--lookup", "pump/6001h:1"],
+                           capture_output=True, text=True)
+        self.assertEqual((r.returncode, r.stdout), (2, ""))
+
     def test_an_unmet_expectation_exits_2_and_says_which(self):
         rc, violations, s = self.run_checker(self.good().lines, "--min-dbirths", "99",
                                              "--expect-data", "pump/Speed=999")

@@ -1,0 +1,129 @@
+#!/bin/sh
+# The gateway as a Sparkplug B 3.0 edge node (contract "Sparkplug B"; facts
+# A in ../shared/ref/sparkplug-ascii-lss-facts.md), seen by a second
+# implementation: tests/tools/sparkplug_check.py decodes every message on
+# spBv1.0/# with code protoc generates from proto/sparkplug_b.proto and
+# checks the specification's rules on all of them, the whole run long
+# (births first, one seq 0..255 without gaps, bdSeq pairs, QoS/retain,
+# metric types and properties). On top of those rules, this run must show:
+#  1. NBIRTH with `Network 1/Bus State`, then a DBIRTH for each simulated
+#     device (net1-node5, -10, -11), then DDATA flowing;
+#  2. NCMD `Node Control/Rebirth` = true: NBIRTH (seq 0, same bdSeq: still one
+#     session) and every DBIRTH again (facts A.6);
+#  3. DCMD on an RPDO-mapped object (the I/O module's 6200h:1): a DDATA with
+#     the written value;
+#  4. SIGTERM: the gateway's own NDEATH with the session's bdSeq (facts A.4.6);
+#  5. a restart: a new session with bdSeq + 1 (facts A.5, kept in state-dir);
+#  6. kill -9: the broker publishes the Will, an NDEATH with that bdSeq.
+# Runs on the host with a real mosquitto; the CAN side is the gateway's
+# simulated network.
+TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
+export TMPDIR
+trap 'kill $MOSQ_PID $CHECK_PID $GW_PID 2>/dev/null || true; rm -rf "$TMPDIR"' EXIT
+. "$(dirname "$0")/../system/lib.sh"
+TOOLS=${SOURCE_DIR:-$(dirname "$0")/../..}/tests/tools
+CHECK="/usr/bin/python3 $TOOLS/sparkplug_check.py"
+GROUP=plant
+GW=gw1
+DEVICES="net1-node5 net1-node10 net1-node11"
+CAP=$T/sparkplug.cap
+MOSQ_PORT=$(free_port)
+start_mosquitto
+
+# The checker, live, for the whole run: its own verdict at the end, and the
+# capture the steps below check as it grows.
+$CHECK --port $MOSQ_PORT --record "$CAP" --ready-file "$T/check.ready" > "$T/check-live.log" 2>&1 &
+CHECK_PID=$!
+wait_for_file() { i=0; until [ -e "$1" ]; do [ $i -lt 100 ] || fail "$2"; sleep 0.1; i=$((i + 1)); done; }
+wait_for_file "$T/check.ready" "the checker did not subscribe: $(cat "$T/check-live.log")"
+
+# sp_wait SECONDS WHAT CHECKER-ARGS...: until the capture meets the
+# expectations; fails at once when a rule is broken (checker status 1).
+sp_wait() {
+  limit=$1 what=$2
+  shift 2
+  i=0
+  while :; do
+    rc=0
+    $CHECK --capture "$CAP" "$@" > "$T/check.out" 2>&1 || rc=$?
+    [ $rc -eq 0 ] && return 0
+    [ $rc -eq 2 ] || fail "$what: $(grep -E '"violation"|sparkplug_check' "$T/check.out" | head -8)"
+    [ $i -lt $((limit * 4)) ] || fail "$what: timed out: $(tail -n 1 "$T/check.out")"
+    sleep 0.25
+    i=$((i + 1))
+  done
+}
+lines() { wc -l < "$CAP"; }
+# summary FIELD: a field of the summary of the latest sp_wait, as JSON.
+summary() { /usr/bin/python3 -c 'import json,sys; print(json.dumps([json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")][-1][sys.argv[2]]))' "$T/check.out" "$1"; }
+each_dbirth() { for d in $DEVICES; do printf -- '--expect-dbirth %s ' "$d"; done; }
+
+cat > "$T/gw.yaml" <<YAML
+gateway: {id: $GW, state-dir: $T/state}
+networks:
+  - simulated: true
+    simulation: {tpdo-period-ms: 100, heartbeat-ms: 200, emcy-period-ms: 3000}
+mqtt:
+  uri: tcp://127.0.0.1:$MOSQ_PORT
+YAML
+GW_ARGS="--config $T/gw.yaml --http 127.0.0.1:0 --sparkplug $GROUP"
+
+# ---- 1: births, then data ---------------------------------------------------
+start_gateway $GW_ARGS
+# shellcheck disable=SC2046
+sp_wait 30 "births and DDATA" --min-nbirths 1 $(each_dbirth) --min-ddata 20 \
+  --expect-birth-metric "/Network 1/Bus State"
+BD=$(summary sessions | /usr/bin/python3 -c 'import json,sys; print(list(json.load(sys.stdin).values())[0][0])')
+pass "NBIRTH (bdSeq $BD), DBIRTH of $DEVICES, DDATA flowing: $(summary counts)"
+
+# ---- 2: NCMD rebirth --------------------------------------------------------
+n=$(lines)
+/usr/bin/python3 "$TOOLS/sparkplug_command.py" "$T/rebirth.bin" 'Node Control/Rebirth=Boolean:true'
+mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t "spBv1.0/$GROUP/NCMD/$GW" -f "$T/rebirth.bin"
+# shellcheck disable=SC2046
+sp_wait 15 "rebirth" --from-line "$n" --min-nbirths 1 $(each_dbirth) --min-ddata 1
+[ "$(summary sessions)" = "{\"$GROUP/$GW\": [$BD]}" ] ||
+  fail "a rebirth must stay in the session (same bdSeq, no NDEATH): sessions $(summary sessions)"
+pass "NCMD Node Control/Rebirth: NBIRTH with seq 0 and bdSeq $BD again, every DBIRTH, then DDATA"
+
+# ---- 3: DCMD on an RPDO-mapped object ---------------------------------------
+# The metric's name and type as the I/O module's DBIRTH gives them (6200h:1).
+METRIC=$($CHECK --capture "$CAP" --lookup net1-node10/6200h:1) ||
+  fail "no metric with index 6200h subIndex 1 in net1-node10's DBIRTH"
+n=$(lines)
+/usr/bin/python3 "$TOOLS/sparkplug_command.py" "$T/write.bin" "$METRIC:165"
+mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t "spBv1.0/$GROUP/DCMD/$GW/net1-node10" -f "$T/write.bin"
+sp_wait 10 "DCMD ${METRIC%=*} = 165" --from-line "$n" --expect-data-object net1-node10/6200h:1=165
+pass "DCMD ${METRIC%=*} (RPDO-mapped) = 165: the value came back in a DDATA"
+
+# ---- 4: clean stop: the gateway's own NDEATH --------------------------------
+n=$(lines)
+stop_gateway
+sp_wait 10 "NDEATH at SIGTERM" --from-line "$n" --expect-ndeath
+pass "SIGTERM: NDEATH with bdSeq $BD before the disconnect"
+
+# ---- 5: restart: bdSeq + 1 --------------------------------------------------
+n=$(lines)
+GW_LOG=$T/gateway2.log
+start_gateway $GW_ARGS
+# shellcheck disable=SC2046
+sp_wait 30 "births after the restart" --from-line "$n" --min-nbirths 1 $(each_dbirth) --min-ddata 5
+NEXT=$(( (BD + 1) % 256 ))
+[ "$(summary sessions)" = "{\"$GROUP/$GW\": [$BD, $NEXT]}" ] ||
+  fail "after the restart the sessions' bdSeqs are $(summary sessions), not [$BD, $NEXT]"
+pass "restart: a new session with bdSeq $NEXT"
+
+# ---- 6: kill -9: the broker publishes the Will ------------------------------
+n=$(lines)
+kill -KILL "$GW_PID"
+wait "$GW_PID" 2>/dev/null || true
+sp_wait 10 "the Will after kill -9" --from-line "$n" --expect-ndeath
+pass "kill -9: the broker published the Will, NDEATH with bdSeq $NEXT"
+
+# ---- the whole run, by the live checker -------------------------------------
+kill -TERM "$CHECK_PID"
+rc=0
+wait "$CHECK_PID" || rc=$?
+[ $rc -eq 0 ] || fail "live checker (status $rc): $(grep -E '"violation"|sparkplug_check' "$T/check-live.log" | head -10)"
+pass "every Sparkplug rule held over the whole run: $(tail -n 1 "$T/check-live.log")"
+stop_mosquitto
