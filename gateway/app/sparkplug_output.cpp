@@ -259,25 +259,24 @@ void SparkplugOutput::on_command(const sparkplug::WriteCommand& cmd) {
     log_.warn("sparkplug: " + what + ": no such device");
     return;
   }
-  for (const auto& item : cmd.items) {
-    auto c = d->model->command_for(item);
-    const std::string name = item.metric < d->model->metrics().size() ? d->model->metrics()[item.metric].name : "?";
-    if (const auto* reason = std::get_if<std::string>(&c)) {
-      log_.warn("sparkplug: " + what + ": write refused: " + *reason);
-      continue;
-    }
+  auto plan = d->model->writes_for(cmd.items);
+  for (const auto& reason : plan.refused) log_.warn("sparkplug: " + what + ": write refused: " + reason);
+  for (auto& w : plan.writes) {
+    std::string objects;
+    for (const auto& o : w.objects)
+      objects += (objects.empty() ? "\"" : ", \"") + d->model->metrics()[*d->model->find(o)].name + "\" (" +
+                 core::object_label(o.index, o.sub_index) + ")";
     core::Request r;
-    r.caller = sparkplug_caller("sparkplug:" + std::string(cmd.device.empty() ? "ncmd" : "dcmd"),
-                                options_.commands_role);
+    r.caller = sparkplug_caller("sparkplug:dcmd", options_.commands_role);
     r.network = d->network;
-    r.command = std::move(std::get<core::Command>(c));
+    r.command = std::move(w.command);
     std::weak_ptr<bool> alive = alive_;
     Device* dp = d;
-    const sparkplug::ObjectRef ref = *d->model->metrics()[item.metric].object;  // command_for: an object metric
-    execute_(std::move(r), [this, alive, dp, what, name, ref](core::Result res) {
+    const sparkplug::ObjectRef ref = w.objects.front();
+    execute_(std::move(r), [this, alive, dp, what, objects, ref](core::Result res) {
       if (alive.expired()) return;
       if (const auto* p = std::get_if<core::Problem>(&res)) {
-        log_.warn("sparkplug: " + what + ": write of \"" + name + "\" refused (" + std::to_string(p->status) + " " +
+        log_.warn("sparkplug: " + what + ": write of " + objects + " refused (" + std::to_string(p->status) + " " +
                   p->detail + ")");
         return;
       }

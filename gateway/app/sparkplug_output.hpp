@@ -22,8 +22,10 @@
 //     -> NDATA.
 //   on_command(cmd)          an NCMD/DCMD write the EdgeSession returned:
 //     with sparkplug.commands-role none it is ignored (logged); otherwise
-//     each item goes to the request core as that role (RPDO write or SDO
-//     download, DeviceModel::command_for), which checks and audits it; a
+//     its items go to the request core as that role (caller
+//     "sparkplug:dcmd"; DeviceModel::writes_for: the values for one RPDO as
+//     one RPDO write, other objects by SDO download), which checks and
+//     audits each; a
 //     success shows in a DDATA (an RPDO's every mapped value as sent, an
 //     SDO write's value), a refusal changes nothing and is logged.
 //
@@ -71,7 +73,7 @@ class SparkplugOutput {
     // canopen::Network::pdo_config(): the PDOs as the master uses them now.
     std::function<const canopen::pdo::RemotePdoTable*(std::uint32_t net)> pdo_table;
     std::function<std::optional<canopen::can::BusState>(std::uint32_t net)> bus_state;  // optional
-    // UTC ms (EdgeClient::now_ms): for messages no frame caused.
+    // UTC ms (EdgeClient::now_ms): for messages no frame caused. MUST be set.
     std::function<std::uint64_t()> now_ms;
   };
   struct Options {

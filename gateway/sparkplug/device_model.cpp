@@ -1,6 +1,7 @@
 #include "sparkplug/device_model.hpp"
 
 #include <array>
+#include <boost/json/parse.hpp>
 #include <boost/json/serialize.hpp>
 #include <cmath>
 #include <map>
@@ -431,6 +432,48 @@ std::variant<core::Command, std::string> DeviceModel::command_for(const WriteCom
     return core::Command{core::RpdoWrite{node_, s.rpdo, boost::json::serialize(body)}};
   }
   return core::Command{core::SdoWrite{node_, ref.index, ref.sub_index, s.type, std::move(json)}};
+}
+
+DeviceModel::Writes DeviceModel::writes_for(std::span<const WriteCommand::Item> items) const {
+  Writes out;
+  std::map<std::uint16_t, std::pair<std::size_t, boost::json::array>> rpdos;  // number -> write, its values
+  for (const auto& item : items) {
+    auto c = command_for(item);
+    if (auto* reason = std::get_if<std::string>(&c)) {
+      out.refused.push_back(std::move(*reason));
+      continue;
+    }
+    const ObjectRef ref = *metrics_[item.metric].object;
+    auto& command = std::get<core::Command>(c);
+    const auto* rpdo = std::get_if<core::RpdoWrite>(&command);
+    if (rpdo == nullptr) {
+      out.writes.push_back({std::move(command), {ref}});
+      continue;
+    }
+    // Values for one RPDO go out as one frame; a repeated object: the last value.
+    auto body = boost::json::parse(rpdo->body);
+    auto& value = body.as_object()["values"].as_array().at(0);
+    auto [it, fresh] = rpdos.try_emplace(rpdo->number, out.writes.size(), boost::json::array{});
+    if (fresh) out.writes.push_back({std::move(command), {}});
+    auto& [at, values] = it->second;
+    auto& objects = out.writes[at].objects;
+    bool replaced = false;
+    for (std::size_t k = 0; k < objects.size(); ++k)
+      if (objects[k] == ref) {
+        values[k] = value;
+        replaced = true;
+      }
+    if (!replaced) {
+      values.push_back(value);
+      objects.push_back(ref);
+    }
+  }
+  for (auto& [number, entry] : rpdos) {
+    boost::json::object body;
+    body["values"] = std::move(entry.second);
+    std::get<core::RpdoWrite>(out.writes[entry.first].command).body = boost::json::serialize(body);
+  }
+  return out;
 }
 
 }  // namespace gateway::sparkplug

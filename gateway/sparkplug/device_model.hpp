@@ -148,6 +148,17 @@ class DeviceModel {
   // from the EDS. Refused with the reason: the fixed metrics, unknown
   // positions, a value that does not fit the object's type or EDS limits.
   std::variant<core::Command, std::string> command_for(const WriteCommand::Item& item) const;
+  // The items of one NCMD/DCMD: as command_for, but the values for one RPDO
+  // become one RpdoWrite (one frame; an object given twice: the last value).
+  struct Writes {
+    struct Write {
+      core::Command command;
+      std::vector<ObjectRef> objects;  // what it writes, in body order
+    };
+    std::vector<Write> writes;         // in the order of their first item
+    std::vector<std::string> refused;  // one reason per refused item
+  };
+  Writes writes_for(std::span<const WriteCommand::Item> items) const;
 
  private:
   std::size_t add(Metric m, Source s);

@@ -284,6 +284,21 @@ struct Rig {
     ASSERT_TRUE(cmd);
     output->on_command(*cmd);
   }
+  // A DCMD with several metrics (UInt8 values).
+  void dcmd_u8(const std::vector<std::pair<std::string, std::uint32_t>>& items) {
+    pb::Payload p;
+    p.set_timestamp(now);
+    for (const auto& [name, value] : items) {
+      auto* m = p.add_metrics();
+      m->set_name(name);
+      m->set_datatype(pb::UInt8);
+      m->set_int_value(value);
+    }
+    std::vector<sparkplug::Outgoing> out;
+    auto cmd = session.received(out, "spBv1.0/plant/DCMD/gw/io", p.SerializeAsString(), now);
+    ASSERT_TRUE(cmd);
+    output->on_command(*cmd);
+  }
   std::string logged() {
     log.flush();  // info lines wait for the loop's flush
     return mlog.text();
@@ -551,6 +566,19 @@ TEST(SparkplugOutput, DcmdToAnRpdoObjectIsAnRpdoWriteAndItsValuesADdata) {
   EXPECT_EQ(metric(p, "Write outputs/Output 1")->timestamp(), kT0 + 700);
 }
 
+// Several values for one RPDO in one DCMD go out as one RPDO write (one frame).
+TEST(SparkplugOutput, OneDcmdWithValuesForOneRpdoIsOneWrite) {
+  Rig rig;
+  rig.boot_up();
+  rig.answer_reads();
+  rig.dcmd_u8({{"Write outputs/Output 1", 1}, {"Write outputs/Output 2", 2}});
+  ASSERT_EQ(rig.fake.requests.size(), 3u);
+  const auto* w = std::get_if<core::RpdoWrite>(&rig.fake.requests[2].command);
+  ASSERT_NE(w, nullptr);
+  EXPECT_EQ(boost::json::parse(w->body),
+            boost::json::parse(R"({"values":[{"index":25088,"subIndex":1,"value":1},{"index":25088,"subIndex":2,"value":2}]})"));
+}
+
 // Contract: any other object by SDO download, typed from the EDS.
 TEST(SparkplugOutput, DcmdToAnSdoObjectIsAnSdoWriteTypedFromTheEds) {
   Rig rig;
@@ -579,7 +607,7 @@ TEST(SparkplugOutput, ARefusedWriteChangesNothingAndIsLogged) {
   rig.dcmd("Speed", pb::UInt16, 500);
   rig.fake.answer(2, core::Problem{422, "SDO abort: value too high", {}, {}, 0x06090031, 0, true});
   EXPECT_TRUE(rig.published("DDATA").empty());
-  EXPECT_NE(rig.logged().find("write of \"Speed\" refused (422 SDO abort: value too high)"), std::string::npos);
+  EXPECT_NE(rig.logged().find("write of \"Speed\" (2200h sub 0) refused (422 SDO abort: value too high)"), std::string::npos);
   rig.dcmd("Speed", pb::UInt16, 1001);
   EXPECT_EQ(rig.fake.requests.size(), 3u) << "above HighLimit: refused before the core";
   EXPECT_NE(rig.logged().find("write refused"), std::string::npos);

@@ -554,6 +554,25 @@ TEST(SparkplugDeviceModel, DcmdToAnotherObjectIsAnSdoWriteTypedFromTheEds) {
   EXPECT_EQ(raw.value, boost::json::value("ab01"));
 }
 
+// One DCMD: the values for one RPDO become one write (one frame), SDO
+// objects one write each, refusals one reason each.
+TEST(SparkplugDeviceModel, WritesOfOneCommandGroupTheRpdoValues) {
+  Fixture f;
+  const auto m = f.build();
+  const std::vector<WriteCommand::Item> items = {{3, Value{std::uint64_t{1}}},
+                                                 {4, Value{std::uint64_t{5}}},
+                                                 {3, Value{std::uint64_t{2}}},
+                                                 {m.fixed(DeviceModel::Kind::NodeState), Value{std::string("x")}}};
+  const auto plan = m.writes_for(items);
+  ASSERT_EQ(plan.writes.size(), 2u);
+  EXPECT_EQ(plan.refused.size(), 1u);
+  const auto& rpdo = std::get<core::RpdoWrite>(plan.writes[0].command);
+  EXPECT_EQ(boost::json::parse(rpdo.body), boost::json::parse(R"({"values":[{"index":25088,"subIndex":1,"value":2}]})"))
+      << "the object given twice: its last value";
+  EXPECT_EQ(plan.writes[0].objects, (std::vector<ObjectRef>{{0x6200, 1}}));
+  EXPECT_TRUE(std::holds_alternative<core::SdoWrite>(plan.writes[1].command));
+}
+
 TEST(SparkplugDeviceModel, ReportedReadOnlyAndUnknownMetricsAreRefused) {
   Fixture f;
   const auto m = f.build();
