@@ -25,9 +25,9 @@
 //     its items go to the request core as that role (caller
 //     "sparkplug:dcmd"; DeviceModel::writes_for: the values for one RPDO as
 //     one RPDO write, other objects by SDO download), which checks and
-//     audits each; a
-//     success shows in a DDATA (an RPDO's every mapped value as sent, an
-//     SDO write's value), a refusal changes nothing and is logged.
+//     audits each; a success shows in a DDATA (an RPDO's every mapped
+//     value as sent, an SDO write's value), a refusal changes nothing and
+//     is logged.
 //
 // Thread safety: io thread only. The EdgeSession, the logger and what the
 // functions refer to MUST outlive the output; request-core answers that
