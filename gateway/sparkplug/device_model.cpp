@@ -248,7 +248,7 @@ DeviceModel DeviceModel::build(const Input& in) {
     for (const auto dir : {canopen::pdo::Direction::Transmit, canopen::pdo::Direction::Receive}) {
       for (const auto* p : in.pdos->pdos(in.node)) {
         if (p->key.direction != dir || !p->parameters.comm.cob_id.valid()) continue;  // not in use
-        if (p->parameters.count > canopen::pdo::kMaxMappedEntries) continue;          // MPDO: no fixed mapping
+        if (p->parameters.count == 0xFE || p->parameters.count == 0xFF) continue;     // MPDO: no fixed mapping
         const std::string label = pdo_label(p->key);
         auto cfg = in.pdos->resolve(in.node, p->key);
         if (cfg) {
@@ -260,8 +260,8 @@ DeviceModel DeviceModel::build(const Input& in) {
         // still metrics, without the PDO (so writes go by SDO).
         m.notes_.push_back(label + " is not usable (" + cfg.error().detail +
                            "): its objects are metrics, written by SDO");
-        for (std::uint8_t k = 1; k <= p->parameters.count; ++k) {
-          const auto raw = p->parameters.entries.find(k);
+        for (unsigned k = 1; k <= p->parameters.count; ++k) {
+          const auto raw = p->parameters.entries.find(static_cast<std::uint8_t>(k));
           if (raw == p->parameters.entries.end()) continue;
           const auto entry = canopen::pdo::MappingEntry::from_raw(raw->second);
           if (entry.index >= 0x0001 && entry.index <= 0x0007 && entry.sub == 0) continue;  // a dummy entry

@@ -332,6 +332,8 @@ struct Fixture {
   std::vector<SparkplugObject> listed = {{0x2200, {}}, {0x2201, 0}, {0x2300, {}}, {0x2400, {}}, {0x5000, {}}};
 };
 
+core::SdoWrite sdo_of(const std::variant<core::Command, std::string>& r);
+
 std::vector<std::string> names(const DeviceModel& m) {
   std::vector<std::string> out;
   for (const auto& metric : m.metrics()) out.push_back(metric.name);
@@ -378,6 +380,22 @@ TEST(SparkplugDeviceModel, MetricsArePdoMappedThenListedThenFixedWithUniqueNames
   EXPECT_EQ(m.sources()[3].rpdo, 1);
   EXPECT_EQ(m.sources()[4].tpdo + m.sources()[4].rpdo, 0);
   EXPECT_TRUE(m.sources()[4].listed);
+}
+
+// A node without EDS: no PDO is decoded, so only its listed objects (as
+// bytes, named by address) and the fixed metrics.
+TEST(SparkplugDeviceModel, ANodeWithoutEdsHasListedObjectsAsBytesAndTheFixedMetrics) {
+  const std::vector<SparkplugObject> listed = {{0x2000, 1}, {0x2001, {}}};
+  DeviceModel::Input in;
+  in.network = 1;
+  in.node = 9;
+  in.device_id = "net1-node9";
+  in.listed = listed;
+  const auto m = DeviceModel::build(in);
+  EXPECT_EQ(names(m), (std::vector<std::string>{"2000h/sub 1", "2001h", "Node/State", "EMCY/Error Code",
+                                                "EMCY/Error Register", "EMCY/Description"}));
+  EXPECT_EQ(m.metrics()[0].datatype, DataType::Bytes);
+  EXPECT_EQ(sdo_of(m.command_for({0, Value{canopen::Bytes{1}}})).type, CT::Domain);
 }
 
 // Contract: types map to the nearest Sparkplug type; Node/State String,
