@@ -61,6 +61,11 @@ codec::Error Session::open(canopen::TimePoint now) {
   return codec::Error::None;
 }
 
+void Session::set_will(std::string topic, std::string payload) {
+  opts_.will_topic = std::move(topic);
+  opts_.will_payload = std::move(payload);
+}
+
 void Session::transport_connected(std::string& out, canopen::TimePoint now) {
   if (state_ != State::Connecting) return;
   out.append(connect_packet_);

@@ -139,6 +139,9 @@ class Session {
   // connect_timeout). An error when CONNECT cannot be built (client id,
   // user or Will not encodable): nothing changes.
   codec::Error open(canopen::TimePoint now);
+  // Replaces the Will (topic "" = none) for the next open(): a Sparkplug
+  // edge node's NDEATH carries a new bdSeq with every CONNECT.
+  void set_will(std::string topic, std::string payload);
   void transport_connected(std::string& out, canopen::TimePoint now);
   void received(std::string& out, std::string_view bytes, canopen::TimePoint now);
   // Returns how many QoS 0 messages this acknowledged (on_acked each).
