@@ -43,7 +43,8 @@ codec::Error Session::open(canopen::TimePoint now) {
   o.clean_start = true;  // the owner's queue, not the broker, holds the backlog
   o.keepalive_s = static_cast<std::uint16_t>(std::clamp<long long>(opts_.keepalive.count(), 0, 65535));
   o.client_id = opts_.client_id;
-  if (!opts_.will_topic.empty()) o.will = codec::Will{opts_.will_topic, opts_.will_payload, opts_.will_qos, opts_.will_retain};
+  if (!opts_.will_topic.empty())
+    o.will = codec::Will{opts_.will_topic, opts_.will_payload, opts_.will_qos, opts_.will_retain};
   if (!opts_.username.empty()) o.username = opts_.username;
   if (!opts_.password.empty()) o.password = opts_.password;
   if (version_ == codec::kMqtt5) {

@@ -48,6 +48,16 @@ std::optional<EdgeClient::Type> type_of(std::string_view topic, std::string_view
 
 }  // namespace
 
+const char* state_name(EdgeSession::State s) {
+  switch (s) {
+    case EdgeSession::State::Offline: return "offline";
+    case EdgeSession::State::WaitingForHost: return "waiting-for-host";
+    case EdgeSession::State::Born: return "online";
+    case EdgeSession::State::Stopping: return "stopping";
+  }
+  return "offline";
+}
+
 const char* EdgeClient::type_name(Type t) { return kTypeNames[static_cast<std::size_t>(t)]; }
 
 struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::SessionEvents {
@@ -391,7 +401,8 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
           session.publish_final(final_bytes, o.topic, o.payload, o.qos, o.retain);
           ++counters.published;
           counters.bytes += o.payload.size();
-          if (auto t = type_of(o.topic, edge.topic_prefix())) ++counters.published_by_type[static_cast<std::size_t>(*t)];
+          if (auto t = type_of(o.topic, edge.topic_prefix()))
+            ++counters.published_by_type[static_cast<std::size_t>(*t)];
         } else if (o.kind == Outgoing::Kind::Disconnect) {
           session.disconnect(final_bytes,
                              session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);

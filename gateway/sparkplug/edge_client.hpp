@@ -127,6 +127,10 @@ class EdgeClient {
   std::shared_ptr<Impl> impl_;
 };
 
+// "offline" "waiting-for-host" "online" (born) "stopping": the state as
+// GET /api/v1/gateway names it.
+const char* state_name(EdgeSession::State s);
+
 // The client's /metrics families (canopen_gateway_sparkplug_*), read at
 // every render() from the slot as its owner holds it (empty: zeros). The
 // slot MUST outlive the registry's render() calls.

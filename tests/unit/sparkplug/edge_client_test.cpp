@@ -63,6 +63,9 @@ class CuttableRelay {
   void cut() { cut_ = true; }
   // While refusing, every connection is closed as soon as it is accepted.
   void refuse(bool on) { refuse_ = on; }
+  // While paused, nothing is read from the edge node: its socket buffers
+  // fill up as with a broker that does not keep up.
+  void pause(bool on) { pause_ = on; }
 
  private:
   void run() {
@@ -92,12 +95,12 @@ class CuttableRelay {
         if (::connect(b, reinterpret_cast<sockaddr*>(&a), sizeof a) != 0) cut_ = true;
         continue;
       }
-      pollfd ps[2] = {{c, POLLIN, 0}, {b, POLLIN, 0}};
+      pollfd ps[2] = {{pause_ ? -1 : c, POLLIN, 0}, {b, POLLIN, 0}};
       if (::poll(ps, 2, 20) <= 0) continue;
       for (int i = 0; i < 2; ++i) {
-        if (ps[i].revents == 0) continue;
+        if (ps[i].fd < 0 || ps[i].revents == 0) continue;
         const ssize_t n = ::read(ps[i].fd, tmp, sizeof tmp);
-        if (n <= 0 || ::write(ps[1 - i].fd, tmp, static_cast<std::size_t>(n)) != n) cut_ = true;
+        if (n <= 0 || ::write(i == 0 ? b : c, tmp, static_cast<std::size_t>(n)) != n) cut_ = true;
       }
     }
     if (c >= 0) ::close(c);
@@ -107,7 +110,7 @@ class CuttableRelay {
   int broker_port_;
   int listen_fd_ = -1;
   int port_ = 0;
-  std::atomic<bool> stop_{false}, cut_{false}, refuse_{false};
+  std::atomic<bool> stop_{false}, cut_{false}, refuse_{false}, pause_{false};
   std::thread thread_;
 };
 
@@ -334,6 +337,47 @@ TEST_F(EdgeClientTest, DataWhileOfflineIsDroppedAndShowsInTheNextBirth) {
   ASSERT_NE(metric(dbirth, "Statusword"), nullptr);
   EXPECT_EQ(metric(dbirth, "Statusword")->int_value(), 0x0637u);
   EXPECT_TRUE(host->on_topic("spBv1.0/plant1/DDATA/gw1/d1").empty()) << "nothing queued while offline";
+}
+
+// Backpressure: while the broker does not take the edge node's bytes, DATA
+// beyond max_buffered is dropped (counted), births are not; once the link
+// has drained the whole birth sequence goes out again (same bdSeq, seq 0),
+// so the host has current values instead of a seq gap (facts A.5, A.6).
+TEST_F(EdgeClientTest, DataDroppedUnderBackpressureIsFollowedByARebirth) {
+  CuttableRelay relay(broker.port());
+  EdgeClientConfig c = config(5, relay.uri());
+  c.max_buffered = 64u << 10;
+  c.mqtt.keepalive = std::chrono::seconds(60);
+  make(std::move(c));
+  ASSERT_TRUE(wait_messages(kDbirth, 1));
+  relay.pause(true);
+  // Far more than the socket buffers and max_buffered hold.
+  ASSERT_TRUE(eventually(
+      [&] {
+        return io.call([&] {
+          std::vector<Outgoing> out;
+          for (int i = 0; i < 2000; ++i) {
+            const Update u[] = {{1, std::int64_t{i}, client->now_ms()}};
+            client->edge().device_data(out, "d1", u, client->now_ms());
+          }
+          client->send(out);
+          return client->counters().dropped > 0;
+        });
+      },
+      20s));
+  relay.pause(false);
+  ASSERT_TRUE(wait_messages(kNbirth, 2, 20s)) << "births again once drained";
+  const auto births = host->on_topic(kNbirth);
+  EXPECT_EQ(parse(births[1]->to_string()).seq(), 0u);
+  EXPECT_EQ(bdseq_of(births[1]), bdseq_of(births[0])) << "the same connection";
+  ASSERT_TRUE(wait_messages(kDbirth, 2));
+  const auto dbirth = parse(host->on_topic(kDbirth)[1]->to_string());
+  ASSERT_NE(metric(dbirth, "Target velocity"), nullptr);
+  EXPECT_EQ(static_cast<std::int32_t>(metric(dbirth, "Target velocity")->int_value()), 1999) << "the latest value";
+  const auto counters = io.call([&] { return client->counters(); });
+  EXPECT_GT(counters.dropped, 0u);
+  EXPECT_EQ(counters.rebirths, 1u);
+  EXPECT_EQ(counters.reconnects, 0u);
 }
 
 }  // namespace
