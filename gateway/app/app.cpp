@@ -12,6 +12,7 @@
 #include "core/format.hpp"
 #include "event_encoder.hpp"
 #include "mqtt_output.hpp"
+#include "sparkplug/edge_client.hpp"
 #include "pipeline_metrics.hpp"
 #include "seq_store.hpp"
 
@@ -149,6 +150,15 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
   } else {
     metrics::register_mqtt(metrics_, {});
   }
+  // Sparkplug B edge node (contract "Sparkplug B"): its own MQTT session.
+  if (config_.sparkplug.enabled) {
+    sparkplug::EdgeClientConfig sc;
+    sc.session = {config_.sparkplug.group_id, config_.sparkplug.edge_node_id, config_.sparkplug.primary_host_id};
+    sc.mqtt = config_.sparkplug.mqtt;
+    sc.state_dir = config_.state_dir;
+    sparkplug_ = std::make_unique<sparkplug::EdgeClient>(io_, std::move(sc), log_);
+    sparkplug::register_metrics(metrics_, sparkplug_);
+  }
 }
 
 App::App(boost::asio::io_context& io, Config config, Logger& log)
@@ -261,6 +271,7 @@ void App::start() {
     mqtt_->start();
     pipeline_.add_consumer([out = mqtt_.get()](const EncodedEventPtr& ev) { out->on_event(ev); });
   }
+  if (sparkplug_) sparkplug_->start();
   for (auto& n : nets_) {
     // The state the channel was opened in: the channel reported it before
     // anyone listened, and the retained bus topic and the state cache (REST,
@@ -297,6 +308,8 @@ void App::stop() {
     down.cause = canopen::can::BusEventCause::LinkDown;
     n->network->report(down);
   }
+  // Sparkplug: NDEATH, then DISCONNECT, while the networks still run.
+  if (sparkplug_) sparkplug_->stop();
   // No retained state may claim a node runs once the gateway is gone; the
   // offline status says when and after how long (mqtt_output.hpp).
   if (mqtt_) mqtt_->stop();
