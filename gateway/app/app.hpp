@@ -73,6 +73,7 @@ class EdgeClient;
 namespace gateway {
 
 class MqttOutput;
+class SparkplugOutput;
 struct Composition;
 struct NetworkUnit;
 
@@ -211,6 +212,8 @@ class App {
   // The Sparkplug B edge node (config.sparkplug.enabled): built in the
   // constructor, started after MQTT, stopped before the networks close.
   std::unique_ptr<sparkplug::EdgeClient> sparkplug_;
+  // Its CANopen side; after sparkplug_: it holds the client's EdgeSession.
+  std::unique_ptr<SparkplugOutput> sparkplug_out_;
   bool started_ = false;
   bool stopped_ = false;
 };
