@@ -52,7 +52,7 @@ std::string usage_text() {
   return "usage: canopen-gateway [--config FILE] [--can IFACE]... [--node-id N]\n"
          "                       [--eds NODE=FILE]... [--mqtt URI]\n"
          "                       [--mqtt-format json|protobuf] [--http ADDR:PORT]\n"
-         "                       [--gateway-id ID] [--demo]\n"
+         "                       [--gateway-id ID] [--sparkplug GROUP_ID] [--demo]\n"
          "                       [--log-level trace|debug|info|warn|error]\n"
          "       canopen-gateway --help | --version\n";
 }
@@ -91,6 +91,11 @@ is needed: --can, networks: in the --config file, or --demo.
   --gateway-id ID    MQTT topic level, canopen/ID/...; no '/', '+', '#' or
                      spaces. Default: gateway.id in the file, else the host
                      name.
+  --sparkplug G      also run a Sparkplug B 3.0 edge node in group G (no '/',
+                     '+', '#' or spaces) on its own MQTT session: edge node id
+                     sparkplug.edge-node-id, else the gateway id; the broker
+                     sparkplug.uri, else mqtt's (--mqtt). Default:
+                     sparkplug.group-id in the file, else off.
   --demo             add a simulated network with a CiA 402 drive (node 5)
                      and two CiA 401 I/O modules (nodes 10, 11): no CAN
                      hardware or broker needed. On a loopback listener
@@ -196,6 +201,11 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
       if (!valid_topic_level(v))
         throw UsageError("--gateway-id: '" + v + "' cannot be an MQTT topic level (no '/', '+', '#', spaces)");
       o.gateway_id = v;
+    } else if (flag == "--sparkplug") {
+      const std::string v = take_value();
+      if (!valid_topic_level(v))
+        throw UsageError("--sparkplug: '" + v + "' cannot be a Sparkplug group id (no '/', '+', '#', spaces)");
+      o.sparkplug_group = v;
     } else if (flag == "--demo") {
       no_value();
       o.demo = true;

@@ -51,13 +51,17 @@ void print_error(const std::string& msg) {
 
 // The broker URI as the publisher will read it, checked before anything
 // starts, so a bad one is a configuration error naming --mqtt or the key.
+// The same for the Sparkplug edge node's broker (sparkplug.uri or mqtt's).
 void check_mqtt_uri(const gateway::Config& c) {
-  if (!c.mqtt.enabled) return;
-  try {
-    (void)gateway::mqtt::parse_endpoint(gateway::mqtt::normalize_server_uri(c.mqtt.server_uri));
-  } catch (const std::invalid_argument& e) {
-    throw gateway::ConfigError(c.mqtt.uri_origin + ": " + e.what());
-  }
+  auto check = [](const std::string& uri, const std::string& origin) {
+    try {
+      (void)gateway::mqtt::parse_endpoint(gateway::mqtt::normalize_server_uri(uri));
+    } catch (const std::invalid_argument& e) {
+      throw gateway::ConfigError(origin + ": " + e.what());
+    }
+  };
+  if (c.mqtt.enabled) check(c.mqtt.server_uri, c.mqtt.uri_origin);
+  if (c.sparkplug.enabled) check(c.sparkplug.mqtt.server_uri, c.sparkplug.uri_origin);
 }
 
 // Why the listener could not be opened, for a person: the errno in words

@@ -12,6 +12,8 @@
 #include "core/format.hpp"
 #include "event_encoder.hpp"
 #include "mqtt_output.hpp"
+#include "sparkplug/edge_client.hpp"
+#include "sparkplug_output.hpp"
 #include "pipeline_metrics.hpp"
 #include "seq_store.hpp"
 
@@ -149,6 +151,30 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
   } else {
     metrics::register_mqtt(metrics_, {});
   }
+  // Sparkplug B edge node (contract "Sparkplug B"): its own MQTT session.
+  if (config_.sparkplug.enabled) {
+    sparkplug::EdgeClientConfig sc;
+    sc.session = {config_.sparkplug.group_id, config_.sparkplug.edge_node_id, config_.sparkplug.primary_host_id};
+    sc.mqtt = config_.sparkplug.mqtt;
+    sc.state_dir = config_.state_dir;
+    sparkplug_ = std::make_unique<sparkplug::EdgeClient>(io_, std::move(sc), log_);
+    sparkplug::register_metrics(metrics_, sparkplug_);
+    // Its CANopen side: every stack event (on_stack_event) and the NCMD/DCMD
+    // writes, which go through the request core like any other front end's.
+    std::vector<SparkplugOutput::Network> spb_networks;
+    for (const auto& n : nets_) spb_networks.push_back({n->number, n->cfg.nodes});
+    SparkplugOutput::Sources sources;
+    sources.description = [this](std::uint32_t net, std::uint8_t node) { return description(net, node); };
+    sources.pdo_table = [this](std::uint32_t net) { return pdo_config(net); };
+    sources.bus_state = [this](std::uint32_t net) { return bus_state(net); };
+    sources.now_ms = [c = sparkplug_.get()] { return c->now_ms(); };
+    sparkplug_out_ = std::make_unique<SparkplugOutput>(
+        sparkplug_->edge(), [c = sparkplug_.get()](std::vector<sparkplug::Outgoing>& out) { c->send(out); },
+        [this](core::Request req, core::RequestCore::Done done) { core_.execute(std::move(req), std::move(done)); },
+        std::move(spb_networks), std::move(sources),
+        SparkplugOutput::Options{config_.sparkplug.aliases, config_.sparkplug.commands_role}, log_);
+    sparkplug_->on_command = [o = sparkplug_out_.get()](sparkplug::WriteCommand cmd) { o->on_command(cmd); };
+  }
 }
 
 App::App(boost::asio::io_context& io, Config config, Logger& log)
@@ -261,6 +287,10 @@ void App::start() {
     mqtt_->start();
     pipeline_.add_consumer([out = mqtt_.get()](const EncodedEventPtr& ev) { out->on_event(ev); });
   }
+  if (sparkplug_) {
+    sparkplug_out_->start();  // the node metrics, born with the first NBIRTH
+    sparkplug_->start();
+  }
   for (auto& n : nets_) {
     // The state the channel was opened in: the channel reported it before
     // anyone listened, and the retained bus topic and the state cache (REST,
@@ -297,6 +327,8 @@ void App::stop() {
     down.cause = canopen::can::BusEventCause::LinkDown;
     n->network->report(down);
   }
+  // Sparkplug: NDEATH, then DISCONNECT, while the networks still run.
+  if (sparkplug_) sparkplug_->stop();
   // No retained state may claim a node runs once the gateway is gone; the
   // offline status says when and after how long (mqtt_output.hpp).
   if (mqtt_) mqtt_->stop();
@@ -325,6 +357,7 @@ void App::stop() {
 // The own node's EMCYs for lost nodes were raised before (LocalNode, in the unit).
 void App::on_stack_event(Net& n, const canopen::Event& ev) {
   log_event(n, ev);
+  if (sparkplug_out_) sparkplug_out_->on_event(n.number, ev);  // typed values, not the encoded event
   // Durably reserved before the event leaves the process (one write per block).
   if (auto ec = n.seq ? n.seq->use(ev.seq) : std::error_code())
     log_.warn(n.label + ": cannot store the event sequence in " + n.seq->file().string() + ": " + ec.message() +

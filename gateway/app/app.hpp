@@ -66,9 +66,14 @@ namespace gateway::mqtt {
 class MqttPublisher;
 }
 
+namespace gateway::sparkplug {
+class EdgeClient;
+}
+
 namespace gateway {
 
 class MqttOutput;
+class SparkplugOutput;
 struct Composition;
 struct NetworkUnit;
 
@@ -84,13 +89,15 @@ class App {
   App(const App&) = delete;
   App& operator=(const App&) = delete;
 
-  // Boot-up of the own node on every network, simulated devices, MQTT.
+  // Boot-up of the own node on every network, simulated devices, MQTT,
+  // the Sparkplug edge node.
   void start();
   // Each network's last event (bus `down`); MQTT: what is queued and the
   // window allows, the retained node states deleted, the offline status
   // with the stop time and uptime (mqtt_output.hpp); CAN closed;
-  // each network's seq stored exactly (config.state_dir). Blocks the io
-  // thread up to 2 s for MQTT. Afterwards the io_context runs out of work.
+  // each network's seq stored exactly (config.state_dir). Sparkplug:
+  // NDEATH and DISCONNECT while the networks still run. Blocks the io
+  // thread up to 2 s each for MQTT and Sparkplug. Afterwards the io_context runs out of work.
   void stop();
 
   // The request core over this App's networks (REST and MQTT requests):
@@ -136,6 +143,9 @@ class App {
   // The MQTT publisher (e.g. tests: its counters); nullptr when MQTT is off
   // or before start().
   const mqtt::MqttPublisher* mqtt_publisher() const;
+  // The Sparkplug B edge node (REST, /metrics, tests); nullptr unless
+  // config.sparkplug.enabled.
+  const sparkplug::EdgeClient* sparkplug() const { return sparkplug_.get(); }
   // The PDO configuration the gateway uses for the described nodes of
   // network `net` (canopen::Network::pdo_config(): EDS/DCF, then what its
   // SDO writes changed and what was read from the devices); nullptr for an
@@ -199,6 +209,11 @@ class App {
   std::vector<std::unique_ptr<Net>> nets_;
   std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();
   std::unique_ptr<MqttOutput> mqtt_;  // with MQTT on (config.mqtt.enabled)
+  // The Sparkplug B edge node (config.sparkplug.enabled): built in the
+  // constructor, started after MQTT, stopped before the networks close.
+  std::unique_ptr<sparkplug::EdgeClient> sparkplug_;
+  // Its CANopen side; after sparkplug_: it holds the client's EdgeSession.
+  std::unique_ptr<SparkplugOutput> sparkplug_out_;
   bool started_ = false;
   bool stopped_ = false;
 };

@@ -4,10 +4,11 @@ file(READ ${CMAKE_SOURCE_DIR}/deploy/eds/cia401-io-module.eds DEMO_IO_EDS)
 configure_file(${CMAKE_CURRENT_LIST_DIR}/demo_devices.cpp.in ${CMAKE_CURRENT_BINARY_DIR}/demo_devices.cpp @ONLY)
 add_library(gateway_app STATIC ${CMAKE_CURRENT_LIST_DIR}/app.cpp ${CMAKE_CURRENT_LIST_DIR}/seq_store.cpp
                                ${CMAKE_CURRENT_LIST_DIR}/network_unit.cpp ${CMAKE_CURRENT_LIST_DIR}/composition.cpp
-                               ${CMAKE_CURRENT_LIST_DIR}/mqtt_output.cpp
+                               ${CMAKE_CURRENT_LIST_DIR}/mqtt_output.cpp ${CMAKE_CURRENT_LIST_DIR}/sparkplug_output.cpp
                                ${CMAKE_CURRENT_BINARY_DIR}/demo_devices.cpp)
 target_include_directories(gateway_app PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_compile_definitions(gateway_app PRIVATE CANOPEN_GATEWAY_VERSION="${PROJECT_VERSION}")
-target_link_libraries(gateway_app PUBLIC gateway_config gateway_auth gateway_core gateway_pipeline gateway_messages gateway_mqtt gateway_sim
+target_link_libraries(gateway_app PUBLIC gateway_config gateway_auth gateway_core gateway_pipeline gateway_messages gateway_mqtt gateway_sim gateway_sparkplug
+                                         gateway_sparkplug_client
                                          canopen_device canopen_local_node canopen_network canopen_socketcan canopen_eds
                                   PRIVATE canopen_options)

@@ -2,6 +2,7 @@
 
 #include "canopen/eds/eds.hpp"
 #include "mqtt/topic_filter.hpp"
+#include "request_codec.hpp"      // parse_index_text
 
 #include <arpa/inet.h>
 #include <unistd.h>
@@ -138,7 +139,7 @@ std::chrono::milliseconds ms(const At& a, std::uint64_t max = 65535) {
 }
 
 void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
-  a.expect_map({"id", "name", "eds", "dcf", "heartbeat-consumer-ms", "guarding", "boot"});
+  a.expect_map({"id", "name", "eds", "dcf", "heartbeat-consumer-ms", "guarding", "boot", "sparkplug-metrics"});
   auto id = a.get("id");
   if (!id) a.fail("missing key 'id' (the node-ID, 1..127)");
   n.id = static_cast<std::uint8_t>(id->integer(1, 127));
@@ -181,6 +182,23 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
     if (bc.read_pdo_config.value_or(false) && n.eds.empty())
       b->fail("read-pdo-config: true needs an eds or dcf file for the node");
     n.boot = bc;
+  }
+  if (auto m = a.get("sparkplug-metrics")) {
+    for (const auto& item : m->items()) {
+      // "2300h", 2300h, "6060h:0", 0x2300: the index in hex as everywhere
+      // in the API (parse_index_text), an optional ":sub" (decimal or 0x).
+      const auto text = item.str();
+      const auto colon = text.find(':');
+      const auto index = parse_index_text(std::string_view(text).substr(0, colon));
+      std::optional<std::uint8_t> sub;
+      if (colon != std::string::npos) sub = parse_sub_index_text(std::string_view(text).substr(colon + 1));
+      if (!index || (colon != std::string::npos && !sub))
+        item.fail("'" + text + "' is not an object (e.g. 2300h, 6060h:0)");
+      SparkplugObject o{*index, sub};
+      if (std::find(n.sparkplug_metrics.begin(), n.sparkplug_metrics.end(), o) != n.sparkplug_metrics.end())
+        item.fail("'" + text + "' is listed twice");
+      n.sparkplug_metrics.push_back(o);
+    }
   }
 }
 
@@ -247,6 +265,22 @@ Role parse_role(const At& a, bool allow_none = false) {
   return *r;
 }
 
+// tls: {ca, cert, key} of an MQTT connection (mqtt, sparkplug).
+void parse_tls_files(const At& t, mqtt::MqttConfig& m, const std::string& dir) {
+  t.expect_map({"ca", "cert", "key"});
+  auto file = [&](const char* key, std::string& out) {
+    if (auto v = t.get(key)) {
+      out = resolve(dir, v->str());
+      std::error_code ec;
+      if (!fs::is_regular_file(out, ec)) v->fail("file '" + out + "' not found");
+    }
+  };
+  file("ca", m.ca_file);
+  file("cert", m.cert_file);
+  file("key", m.key_file);
+  if (m.cert_file.empty() != m.key_file.empty()) t.fail("cert and key go together");
+}
+
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   a.expect_map({"uri", "client-id", "username", "password", "password-file", "tls", "format", "qos", "heartbeat",
                 "heartbeat-min-interval-ms", "queue", "requests-role", "reply-topics"});
@@ -263,20 +297,7 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
     if (!in) v->fail("cannot read '" + resolve(dir, v->str()) + "'");
     std::getline(in, m.password);
   }
-  if (auto t = a.get("tls")) {
-    t->expect_map({"ca", "cert", "key"});
-    auto file = [&](const char* key, std::string& out) {
-      if (auto v = t->get(key)) {
-        out = resolve(dir, v->str());
-        std::error_code ec;
-        if (!fs::is_regular_file(out, ec)) v->fail("file '" + out + "' not found");
-      }
-    };
-    file("ca", m.ca_file);
-    file("cert", m.cert_file);
-    file("key", m.key_file);
-    if (m.cert_file.empty() != m.key_file.empty()) t->fail("cert and key go together");
-  }
+  if (auto t = a.get("tls")) parse_tls_files(*t, m, dir);
   if (auto v = a.get("format")) {
     const auto f = v->str();
     if (f == "json") m.format = PayloadFormat::Json;
@@ -309,6 +330,50 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
     if (auto s = q->get("storage"); s && !s->is_map())
       s->fail("expected kind: mode pairs, e.g. tpdo: outage");  // read in parse_config
   }
+}
+
+// Sparkplug ids are topic levels (spec ch4: no '+', '/', '#'); like the
+// gateway id, no spaces or control characters either.
+void sparkplug_id(const At& v, std::string& out) {
+  out = v.str();
+  if (!valid_topic_level(out))
+    v.fail("'" + out + "' cannot be a Sparkplug id (1..64 characters, no '/', '+', '#', spaces)");
+}
+
+void parse_sparkplug(const At& a, SparkplugConfig& sp, const std::string& dir) {
+  a.expect_map({"group-id", "edge-node-id", "primary-host-id", "aliases", "commands-role", "uri", "client-id",
+                "username", "password", "password-file", "tls", "mqtt-version", "keepalive-s"});
+  auto group = a.get("group-id");
+  if (!group) a.fail("missing key 'group-id' (the Sparkplug group, e.g. plant1)");
+  sparkplug_id(*group, sp.group_id);
+  sp.enabled = true;
+  sp.origin = group->where();
+  if (auto v = a.get("edge-node-id")) sparkplug_id(*v, sp.edge_node_id);
+  if (auto v = a.get("primary-host-id")) sparkplug_id(*v, sp.primary_host_id);
+  if (auto v = a.get("aliases")) sp.aliases = v->boolean();
+  if (auto v = a.get("commands-role")) sp.commands_role = parse_role(*v, true);
+  auto& m = sp.mqtt;
+  if (auto v = a.get("uri")) {
+    m.server_uri = v->str();  // checked with mqtt.uri's rules by main (check_mqtt_uris)
+    sp.uri_origin = v->where();
+  }
+  if (auto v = a.get("client-id")) m.client_id = v->str();
+  if (auto v = a.get("username")) m.username = v->str();
+  if (auto v = a.get("password")) m.password = v->str();
+  if (auto v = a.get("password-file")) {
+    if (a.get("password")) v->fail("give either password or password-file, not both");
+    std::ifstream in(resolve(dir, v->str()));
+    if (!in) v->fail("cannot read '" + resolve(dir, v->str()) + "'");
+    std::getline(in, m.password);
+  }
+  if (auto t = a.get("tls")) parse_tls_files(*t, m, dir);
+  if (auto v = a.get("mqtt-version")) {
+    const auto s = v->str();
+    if (s == "5") m.mqtt_version = 5;
+    else if (s == "3.1.1") m.mqtt_version = 4;
+    else v->fail("'" + s + "' is not 5 (falls back to 3.1.1 when the broker refuses it) or 3.1.1");
+  }
+  if (auto v = a.get("keepalive-s")) m.keepalive = std::chrono::seconds(v->integer(1, 65535));
 }
 
 
@@ -408,7 +473,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   const std::string dir = file.empty() ? std::string() : fs::path(file).parent_path().string();
   At top(root, "", file);
   if (top.is_null()) return c;
-  top.expect_map({"gateway", "networks", "mqtt", "http"});
+  top.expect_map({"gateway", "networks", "mqtt", "http", "sparkplug"});
   std::uint8_t default_node_id = 127;
   if (auto g = top.get("gateway")) {
     g->expect_map({"id", "node-id", "log-level", "state-dir"});
@@ -473,6 +538,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
     }
   }
   if (auto h = top.get("http")) parse_http(*h, c.http, dir);
+  if (auto sp = top.get("sparkplug")) parse_sparkplug(*sp, c.sparkplug, dir);
   return c;
 }
 
@@ -553,6 +619,46 @@ Config merge(Config c, const CliOptions& cli) {
   }
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
   if (c.mqtt.client_id.empty()) c.mqtt.client_id = "canopen-gateway-" + c.gateway_id;
+  if (cli.sparkplug_group) {
+    c.sparkplug.enabled = true;
+    c.sparkplug.group_id = *cli.sparkplug_group;
+    c.sparkplug.origin = "--sparkplug " + *cli.sparkplug_group;
+  }
+  if (c.sparkplug.enabled) {
+    auto& sp = c.sparkplug;
+    if (sp.edge_node_id.empty()) sp.edge_node_id = c.gateway_id;
+    if (sp.mqtt.client_id.empty()) sp.mqtt.client_id = "canopen-gateway-" + c.gateway_id + "-spb";
+    // The same broker as the native topics unless sparkplug.uri says
+    // otherwise; only then its credentials and TLS files too (mqtt's
+    // password is not sent to another broker).
+    const bool same_broker = sp.mqtt.server_uri.empty() || (c.mqtt.enabled && sp.mqtt.server_uri == c.mqtt.server_uri);
+    if (sp.mqtt.server_uri.empty()) {
+      if (!c.mqtt.enabled)
+        throw ConfigError(sp.origin + ": no broker for the Sparkplug edge node: set sparkplug.uri, or turn MQTT on "
+                                      "(mqtt.uri or --mqtt; Sparkplug then uses the same broker)");
+      sp.mqtt.server_uri = c.mqtt.server_uri;
+      sp.uri_origin = c.mqtt.uri_origin + " (sparkplug.uri not set)";
+    }
+    if (same_broker) {
+      if (sp.mqtt.username.empty() && sp.mqtt.password.empty()) {
+        sp.mqtt.username = c.mqtt.username;
+        sp.mqtt.password = c.mqtt.password;
+      }
+      if (sp.mqtt.ca_file.empty() && sp.mqtt.cert_file.empty()) {
+        sp.mqtt.ca_file = c.mqtt.ca_file;
+        sp.mqtt.cert_file = c.mqtt.cert_file;
+        sp.mqtt.key_file = c.mqtt.key_file;
+        sp.mqtt.key_password = c.mqtt.key_password;
+      }
+    }
+    sp.mqtt.verify_server = c.mqtt.verify_server;
+    sp.mqtt.connect_timeout = c.mqtt.connect_timeout;
+    sp.mqtt.reconnect_min = c.mqtt.reconnect_min;
+    sp.mqtt.reconnect_max = c.mqtt.reconnect_max;
+    if (sp.mqtt.client_id == c.mqtt.client_id && same_broker)
+      throw ConfigError(sp.origin + ": sparkplug.client-id '" + sp.mqtt.client_id +
+                        "' is mqtt's as well: the broker would drop one session for the other");
+  }
   if (cli.http) {
     split_host_port(*cli.http, c.http.address, c.http.port);
     c.http.listen_origin = "--http " + *cli.http;

@@ -133,6 +133,7 @@ struct MqttConfig : mqtt::MqttConfig {
 struct SparkplugConfig {
   bool enabled = false;          // --sparkplug GROUP_ID or sparkplug.group-id
   std::string origin;            // "--sparkplug G", "gw.yaml:40: sparkplug.group-id" (messages)
+  std::string uri_origin;        // "gw.yaml:41: sparkplug.uri", or mqtt's uri_origin when inherited
   std::string group_id;          // no '+', '/', '#'
   std::string edge_node_id;      // "" = the gateway id (merge() fills it in)
   std::string primary_host_id;   // "" = none

@@ -11,6 +11,7 @@
 #include <boost/asio/ssl/host_name_verification.hpp>
 #include <boost/asio/write.hpp>
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <stdexcept>
@@ -20,6 +21,25 @@ namespace gateway::mqtt {
 namespace asio = boost::asio;
 using asio::ip::tcp;
 using Clock = std::chrono::steady_clock;
+
+std::unique_ptr<asio::ssl::context> make_tls_context(const MqttConfig& c) {
+  auto ctx = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_client);
+  if (!c.ca_file.empty())
+    ctx->load_verify_file(c.ca_file);
+  else
+    ctx->set_default_verify_paths();
+  if (!c.key_password.empty())
+    ctx->set_password_callback([pw = c.key_password](std::size_t, asio::ssl::context::password_purpose) { return pw; });
+  if (!c.cert_file.empty()) ctx->use_certificate_chain_file(c.cert_file);
+  if (!c.key_file.empty()) ctx->use_private_key_file(c.key_file, asio::ssl::context::pem);
+  return ctx;
+}
+
+std::chrono::milliseconds reconnect_delay(const MqttConfig& c, unsigned failures) {
+  auto delay = c.reconnect_min;
+  for (unsigned i = 0; i < failures && delay < c.reconnect_max; ++i) delay *= 2;
+  return std::min(delay, c.reconnect_max);
+}
 
 Endpoint parse_endpoint(const std::string& uri) {
   Endpoint ep;

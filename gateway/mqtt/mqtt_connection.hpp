@@ -32,6 +32,8 @@
 #include <boost/asio/ssl/stream.hpp>
 #include <string_view>
 
+#include "mqtt/mqtt_config.hpp"
+
 namespace gateway::mqtt {
 
 // From a normalized URI (tcp://, ssl://): host (no brackets), port.
@@ -43,6 +45,16 @@ struct Endpoint {
 // Throws std::invalid_argument for a URI normalize_server_uri() would not
 // give, or a bad port.
 Endpoint parse_endpoint(const std::string& normalized_uri);
+
+// The TLS client context of an ssl:// connection from c's ca_file ("" =
+// the system trust store), cert_file, key_file and key_password. Throws
+// std::exception (e.g. boost::system::system_error) when a file cannot be
+// used; callers log that and retry later.
+std::unique_ptr<boost::asio::ssl::context> make_tls_context(const MqttConfig& c);
+
+// The reconnect delay after `failures` consecutive failed attempts:
+// reconnect_min doubling per failure, capped at reconnect_max.
+std::chrono::milliseconds reconnect_delay(const MqttConfig& c, unsigned failures);
 
 class MqttConnection : public std::enable_shared_from_this<MqttConnection> {
  public:

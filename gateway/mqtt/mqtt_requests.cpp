@@ -197,6 +197,9 @@ struct MqttRequests::State {
     codec::PublishProperties props;
     if (!addr.correlation.empty()) props.correlation_data = addr.correlation;
     props.user.push_back({"status", status});
+    // As HTTP's Retry-After (429/503): a requester need not parse the body.
+    const std::string retry = r.retry_after > 0 ? std::to_string(r.retry_after) : std::string();
+    if (!retry.empty()) props.user.push_back({"retry-after", retry});
     if (!r.content_type.empty()) props.content_type = r.content_type;
     switch (sender ? sender(addr.topic, body, props) : ReplyOutcome::gone) {
       case ReplyOutcome::sent:

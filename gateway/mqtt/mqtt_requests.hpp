@@ -9,7 +9,9 @@
 // Decoding: the network and node come from the topic (decimal; node 0 only
 // for nmt); a bad topic is answered 400 here. Reply address: MQTT 5
 // response topic + correlation data (copied to the reply, which also
-// carries a user property "status" with the HTTP-style code); otherwise, or
+// carries a user property "status" with the HTTP-style code, and
+// "retry-after" in seconds when the core said when to try again, as HTTP's
+// Retry-After with 429/503); otherwise, or
 // over 3.1.1, the JSON body's "replyTo" (string) and "correlationId" (any
 // JSON value): both are taken out of the body before it is decoded, and a
 // JSON reply gets "correlationId" added. The bearer token: MQTT 5 user

@@ -187,18 +187,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   bool ensure_tls() {
     if (!endpoint.tls || tls_ctx) return true;
     try {
-      auto ctx = std::make_unique<asio::ssl::context>(asio::ssl::context::tls_client);
-      if (!cfg.ca_file.empty())
-        ctx->load_verify_file(cfg.ca_file);
-      else
-        ctx->set_default_verify_paths();
-      if (!cfg.key_password.empty())
-        ctx->set_password_callback([pw = cfg.key_password](std::size_t, asio::ssl::context::password_purpose) {
-          return pw;
-        });
-      if (!cfg.cert_file.empty()) ctx->use_certificate_chain_file(cfg.cert_file);
-      if (!cfg.key_file.empty()) ctx->use_private_key_file(cfg.key_file, asio::ssl::context::pem);
-      tls_ctx = std::move(ctx);
+      tls_ctx = make_tls_context(cfg);
       return true;
     } catch (const std::exception& e) {
       log.error(std::string("mqtt: TLS setup for ") + uri + " failed: " + e.what());
@@ -251,9 +240,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
 
   void schedule_retry() {
     if (!running) return;
-    auto delay = cfg.reconnect_min;
-    for (unsigned i = 0; i < failures && delay < cfg.reconnect_max; ++i) delay *= 2;
-    if (delay > cfg.reconnect_max) delay = cfg.reconnect_max;
+    const auto delay = reconnect_delay(cfg, failures);
     ++failures;
     retry_timer.expires_after(delay);
     retry_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {

@@ -43,7 +43,8 @@ codec::Error Session::open(canopen::TimePoint now) {
   o.clean_start = true;  // the owner's queue, not the broker, holds the backlog
   o.keepalive_s = static_cast<std::uint16_t>(std::clamp<long long>(opts_.keepalive.count(), 0, 65535));
   o.client_id = opts_.client_id;
-  if (!opts_.will_topic.empty()) o.will = codec::Will{opts_.will_topic, opts_.will_payload, 1, true};
+  if (!opts_.will_topic.empty())
+    o.will = codec::Will{opts_.will_topic, opts_.will_payload, opts_.will_qos, opts_.will_retain};
   if (!opts_.username.empty()) o.username = opts_.username;
   if (!opts_.password.empty()) o.password = opts_.password;
   if (version_ == codec::kMqtt5) {
@@ -59,6 +60,11 @@ codec::Error Session::open(canopen::TimePoint now) {
   state_ = State::Connecting;
   set_deadline(now + opts_.connect_timeout);
   return codec::Error::None;
+}
+
+void Session::set_will(std::string topic, std::string payload) {
+  opts_.will_topic = std::move(topic);
+  opts_.will_payload = std::move(payload);
 }
 
 void Session::transport_connected(std::string& out, canopen::TimePoint now) {
@@ -370,7 +376,7 @@ Session::SendResult Session::subscribe(std::string& out, std::span<const codec::
   return r;
 }
 
-void Session::disconnect(std::string& out) { codec::encode_disconnect(out, version_); }
+void Session::disconnect(std::string& out, std::uint8_t reason) { codec::encode_disconnect(out, version_, reason); }
 
 void Session::restart_window() { forget_window(false); }
 

@@ -94,13 +94,20 @@ class SessionEvents {
 
 class Session {
  public:
+  // MQTT 5 DISCONNECT reason 0x04 "Disconnect with Will Message" (what a
+  // Sparkplug edge node sends at an intentional disconnect, facts A.4.6).
+  static constexpr std::uint8_t kDisconnectWithWill = 0x04;
   // Room under the broker's Receive Maximum for the status and replies.
   static constexpr std::size_t kReceiveMaximumReserve = 4;
 
   struct Options {
     int mqtt_version = 5;  // 5: MQTT 5 with fallback to 3.1.1; 4: 3.1.1 only
     std::string client_id, username, password;  // empty user/password: none
-    std::string will_topic, will_payload;        // retained, QoS 1; empty topic: no Will
+    std::string will_topic, will_payload;        // empty topic: no Will
+    // The native status Will is retained QoS 1 (the defaults); a Sparkplug
+    // NDEATH Will is QoS 1, not retained (facts A.4.2).
+    std::uint8_t will_qos = 1;
+    bool will_retain = true;
     std::chrono::seconds keepalive{30};
     std::chrono::seconds connect_timeout{10};
     std::size_t inflight_window = 256;           // QoS 1 messages in flight
@@ -132,6 +139,9 @@ class Session {
   // connect_timeout). An error when CONNECT cannot be built (client id,
   // user or Will not encodable): nothing changes.
   codec::Error open(canopen::TimePoint now);
+  // Replaces the Will (topic "" = none) for the next open(): a Sparkplug
+  // edge node's NDEATH carries a new bdSeq with every CONNECT.
+  void set_will(std::string topic, std::string payload);
   void transport_connected(std::string& out, canopen::TimePoint now);
   void received(std::string& out, std::string_view bytes, canopen::TimePoint now);
   // Returns how many QoS 0 messages this acknowledged (on_acked each).
@@ -157,7 +167,10 @@ class Session {
   void publish_final(std::string& out, std::string_view topic, std::string_view payload, std::uint8_t qos,
                      bool retain);
   SendResult subscribe(std::string& out, std::span<const codec::Subscription> subs);
-  void disconnect(std::string& out);
+  // DISCONNECT. `reason` is sent under MQTT 5 only (3.1.1 has none; there
+  // any DISCONNECT makes the broker discard the Will): 0 "normal", the
+  // broker discards the Will; kDisconnectWithWill, the broker publishes it.
+  void disconnect(std::string& out, std::uint8_t reason = 0);
   // Forgets the queue messages in flight (a stall: the owner hands them
   // out again, oldest first); control messages stay.
   void restart_window();

@@ -22,6 +22,7 @@
 #include "json_text.hpp"
 #include "request_codec.hpp"
 #include "rest_parse.hpp"
+#include "sparkplug/edge_client.hpp"
 
 namespace gateway {
 
@@ -165,6 +166,27 @@ json::object node_summary(const App& app, std::uint32_t net, const NodeInfo& n, 
   return o;
 }
 
+// The Sparkplug B edge node's session (GET /api/v1/gateway).
+json::object sparkplug_json(const sparkplug::EdgeClient& sp) {
+  const auto& edge = sp.edge();
+  const auto& cfg = sp.config();
+  const auto counters = sp.counters();
+  json::object o;
+  o["groupId"] = cfg.session.group_id;
+  o["edgeNodeId"] = cfg.session.edge_node_id;
+  o["state"] = sparkplug::state_name(edge.state());
+  o["connected"] = sp.connected();
+  o["bdSeq"] = edge.bd_seq() ? json::value(*edge.bd_seq()) : json::value(nullptr);
+  const auto rebirth = edge.last_rebirth();
+  o["lastRebirth"] = rebirth ? json::value(timestamp_text(WallTime(std::chrono::milliseconds(*rebirth))))
+                             : json::value(nullptr);
+  if (!cfg.session.primary_host_id.empty())
+    o["primaryHost"] = json::object{{"id", cfg.session.primary_host_id}, {"online", edge.host_online()}};
+  o["messagesPublished"] = counters.published;
+  o["commandsReceived"] = counters.commands;
+  return o;
+}
+
 // ---- routes ------------------------------------------------------------------
 
 void get_gateway(App& app, const Request&, Responder respond) {
@@ -193,6 +215,7 @@ void get_gateway(App& app, const Request&, Responder respond) {
   c["sdoTimeouts"] = app.counters().sdo_timeouts;
   c["nmtCommands"] = app.counters().nmt_commands;
   o["counters"] = std::move(c);
+  if (const auto* sp = app.sparkplug()) o["sparkplug"] = sparkplug_json(*sp);
   respond(json_response(o));
 }
 

@@ -156,6 +156,10 @@ void EdgeSession::end_session(std::vector<Outgoing>& out, std::uint64_t /*now*/)
   for (auto& d : devices_) d.born = false;
 }
 
+void EdgeSession::rebirth(std::vector<Outgoing>& out, std::uint64_t now) {
+  if (state_ == State::Born) births(out, now);
+}
+
 void EdgeSession::stop(std::vector<Outgoing>& out, std::uint64_t now) {
   if (state_ == State::Offline || state_ == State::Stopping) return;
   end_session(out, now);

@@ -127,6 +127,10 @@ class EdgeSession {
   // non-rebirth command metrics of an NCMD/DCMD, if any.
   std::optional<WriteCommand> received(std::vector<Outgoing>& out, std::string_view topic, std::string_view payload,
                                        std::uint64_t now);
+  // The whole birth sequence again (NBIRTH seq 0, same bdSeq, every
+  // DBIRTH), as an NCMD rebirth does, when born; nothing otherwise. For the
+  // owner after it had to drop DATA (a seq gap the host cannot repair).
+  void rebirth(std::vector<Outgoing>& out, std::uint64_t now);
   // Intentional disconnect: NDEATH (same bdSeq as the Will) and DISCONNECT.
   // Nothing when not connected.
   void stop(std::vector<Outgoing>& out, std::uint64_t now);

@@ -1,10 +1,20 @@
-# Sparkplug B 3.0 edge node, sans-I/O (sparkplug/edge_session.hpp): the
+# Sparkplug B edge node, sans-I/O (sparkplug/edge_session.hpp): the
 # payload writer and command decoder (payload.hpp, proto/sparkplug_b.proto),
-# the session state machine and the bdSeq kept in state-dir. The MQTT
-# connection and the CANopen side are wired in by the application.
+# the session state machine and the bdSeq kept in state-dir; the CANopen
+# side of it: a node as a device, its metrics and commands (device_model.hpp).
+# The MQTT connection and the events are wired in by the application.
 add_library(gateway_sparkplug STATIC
   ${CMAKE_CURRENT_LIST_DIR}/payload.cpp
   ${CMAKE_CURRENT_LIST_DIR}/bdseq_store.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/edge_session.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/edge_session.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/device_model.cpp)
 target_include_directories(gateway_sparkplug PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
-target_link_libraries(gateway_sparkplug PUBLIC canopen_core PRIVATE gateway_lib sparkplug_proto Boost::json canopen_options)
+target_link_libraries(gateway_sparkplug PUBLIC canopen_core gateway_core_types canopen_pdo canopen_eds
+                                        PRIVATE gateway_lib sparkplug_proto Boost::json canopen_json canopen_options)
+# The edge node on the network (edge_client.hpp): the Asio adapter running
+# the EdgeSession over the MQTT session and connection of gateway_mqtt. A
+# library of its own so gateway_sparkplug stays sans-I/O (no Asio, no
+# sockets) and its tests need no broker.
+add_library(gateway_sparkplug_client STATIC ${CMAKE_CURRENT_LIST_DIR}/edge_client.cpp)
+target_link_libraries(gateway_sparkplug_client PUBLIC gateway_sparkplug gateway_mqtt gateway_metrics gateway_lib
+                                               PRIVATE canopen_options)

@@ -198,8 +198,159 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
               HasSubstr("not a hex SHA-256"));
   EXPECT_THAT(config_error("networks: [1, 2\n"), HasSubstr("gw.yaml:2: not valid YAML"));
   EXPECT_THAT(config_error("networks: can0\n"), HasSubstr("networks: expected a list"));
-  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http)");
+  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http, sparkplug)");
   EXPECT_THAT(config_error("- a\n"), HasSubstr("(top level): expected a mapping of keys"));
+}
+
+// Contract "Sparkplug B": every sparkplug key reaches its field, and each
+// node's sparkplug-metrics objects (YAML plain or quoted, index in hex as in
+// the API, an optional sub-index).
+TEST(Config, SparkplugKeysReachTheirFields) {
+  const std::string dir = ::testing::TempDir();
+  const std::string pw = dir + "/spb-password";
+  std::ofstream(pw) << "s3cret\n";
+  const std::string yaml = "gateway: {id: gw7}\n"
+                           "networks:\n  - interface: can0\n    nodes:\n"
+                           "      - id: 5\n        sparkplug-metrics: [2300h, \"1017h\", \"6060h:0\", 0x2001, \"2002h:0x1F\"]\n"
+                           "sparkplug:\n"
+                           "  group-id: plant1\n"
+                           "  edge-node-id: line-3\n"
+                           "  primary-host-id: scada-1\n"
+                           "  aliases: true\n"
+                           "  commands-role: admin\n"
+                           "  uri: ssl://spb-broker:8883\n"
+                           "  client-id: spb-client\n"
+                           "  username: edge\n"
+                           "  password-file: " + pw + "\n"
+                           "  tls: {ca: " + kEds + "}\n"
+                           "  mqtt-version: 3.1.1\n"
+                           "  keepalive-s: 15\n";
+  const Config c = merge(parse_config(yaml, "gw.yaml"), CliOptions{});
+  const auto& sp = c.sparkplug;
+  EXPECT_TRUE(sp.enabled);
+  EXPECT_EQ(sp.origin, "gw.yaml:8: sparkplug.group-id");
+  EXPECT_EQ(sp.group_id, "plant1");
+  EXPECT_EQ(sp.edge_node_id, "line-3");
+  EXPECT_EQ(sp.primary_host_id, "scada-1");
+  EXPECT_TRUE(sp.aliases);
+  EXPECT_EQ(sp.commands_role, Role::Admin);
+  EXPECT_EQ(sp.mqtt.server_uri, "ssl://spb-broker:8883");
+  EXPECT_EQ(sp.uri_origin, "gw.yaml:13: sparkplug.uri");
+  EXPECT_EQ(sp.mqtt.client_id, "spb-client");
+  EXPECT_EQ(sp.mqtt.username, "edge");
+  EXPECT_EQ(sp.mqtt.password, "s3cret");
+  EXPECT_EQ(sp.mqtt.ca_file, kEds);
+  EXPECT_EQ(sp.mqtt.mqtt_version, 4);
+  EXPECT_EQ(sp.mqtt.keepalive, 15s);
+  EXPECT_EQ(c.networks[0].nodes[0].sparkplug_metrics,
+            (std::vector<SparkplugObject>{{0x2300, std::nullopt}, {0x1017, std::nullopt}, {0x6060, 0}, {0x2001, std::nullopt},
+                                          {0x2002, 0x1F}}));
+  EXPECT_TRUE(parse_config("", "gw.yaml").networks.empty());
+  EXPECT_FALSE(parse_config("", "gw.yaml").sparkplug.enabled) << "off unless configured";
+}
+
+// merge(): the edge node id is the gateway id, the broker mqtt's (with its
+// credentials and TLS files), the client id canopen-gateway-<id>-spb,
+// commands act as operator; --sparkplug turns it on.
+TEST(Config, SparkplugDefaultsFromTheGatewayAndMqtt) {
+  const Config file = parse_config("gateway: {id: gw7}\nnetworks:\n  - interface: can0\n"
+                                   "mqtt: {uri: tcp://broker:1883, username: u, password: p}\n",
+                                   "gw.yaml");
+  CliOptions cli;
+  cli.sparkplug_group = "plant1";
+  const Config c = merge(file, cli);
+  const auto& sp = c.sparkplug;
+  EXPECT_TRUE(sp.enabled);
+  EXPECT_EQ(sp.origin, "--sparkplug plant1");
+  EXPECT_EQ(sp.group_id, "plant1");
+  EXPECT_EQ(sp.edge_node_id, "gw7");
+  EXPECT_EQ(sp.primary_host_id, "");
+  EXPECT_FALSE(sp.aliases);
+  EXPECT_EQ(sp.commands_role, Role::Operator);
+  EXPECT_EQ(sp.mqtt.server_uri, "tcp://broker:1883");
+  EXPECT_THAT(sp.uri_origin, HasSubstr("gw.yaml:4: mqtt.uri"));
+  EXPECT_EQ(sp.mqtt.client_id, "canopen-gateway-gw7-spb");
+  EXPECT_EQ(sp.mqtt.username, "u");
+  EXPECT_EQ(sp.mqtt.password, "p");
+  EXPECT_EQ(sp.mqtt.mqtt_version, 5);
+  EXPECT_EQ(sp.mqtt.keepalive, c.mqtt.keepalive);
+  EXPECT_FALSE(merge(file, CliOptions{}).sparkplug.enabled);
+
+  // Another broker (sparkplug.uri) gets none of mqtt's credentials.
+  const Config other = merge(parse_config("gateway: {id: gw7}\nnetworks:\n  - interface: can0\n"
+                                          "mqtt: {uri: tcp://broker:1883, username: u, password: p}\n"
+                                          "sparkplug: {group-id: g, uri: tcp://other:1883}\n",
+                                          "gw.yaml"),
+                             CliOptions{});
+  EXPECT_EQ(other.sparkplug.mqtt.server_uri, "tcp://other:1883");
+  EXPECT_EQ(other.sparkplug.mqtt.username, "");
+  EXPECT_EQ(other.sparkplug.mqtt.password, "");
+  // Without MQTT, sparkplug.uri alone is enough.
+  const Config alone = merge(parse_config("networks:\n  - interface: can0\nsparkplug: {group-id: g, uri: tcp://b}\n",
+                                          "gw.yaml"),
+                             CliOptions{});
+  EXPECT_FALSE(alone.mqtt.enabled);
+  EXPECT_EQ(alone.sparkplug.mqtt.server_uri, "tcp://b");
+}
+
+// Every sparkplug mistake is one line naming file, line, key and reason.
+TEST(Config, SparkplugErrorsNameFileLineKeyAndReason) {
+  const std::string net = "networks:\n  - interface: can0\n";
+  EXPECT_EQ(config_error(net + "sparkplug: {edge-node-id: e}\n"),
+            "gw.yaml:3: sparkplug: missing key 'group-id' (the Sparkplug group, e.g. plant1)");
+  for (const char* bad : {"a/b", "a+b", "'#'", "''", "'with space'"}) {
+    EXPECT_THAT(config_error(net + "sparkplug: {group-id: " + bad + "}\n"),
+                HasSubstr("gw.yaml:3: sparkplug.group-id: '"))
+        << bad;
+    EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, edge-node-id: " + bad + "}\n"),
+                HasSubstr("sparkplug.edge-node-id: '"))
+        << bad;
+    EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, primary-host-id: " + bad + "}\n"),
+                HasSubstr("sparkplug.primary-host-id: '"))
+        << bad;
+  }
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: a/b}\n"), HasSubstr("cannot be a Sparkplug id"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, commands-role: root}\n"),
+              HasSubstr("sparkplug.commands-role: 'root' is not viewer, operator or admin or none"));
+  EXPECT_EQ(parse_config(net + "sparkplug: {group-id: g, commands-role: none}\n", "gw.yaml").sparkplug.commands_role,
+            Role::None);
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, aliases: maybe}\n"),
+              HasSubstr("sparkplug.aliases: 'maybe' is not true or false"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, mqtt-version: 3}\n"),
+              HasSubstr("sparkplug.mqtt-version: '3' is not 5"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, keepalive-s: 0}\n"),
+              HasSubstr("sparkplug.keepalive-s: 0 is out of range 1..65535"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, tls: {cert: " + kEds + "}}\n"),
+              HasSubstr("sparkplug.tls: cert and key go together"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, tls: {ca: /nope.pem}}\n"),
+              HasSubstr("sparkplug.tls.ca: file '/nope.pem' not found"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, password: a, password-file: /nope}\n"),
+              HasSubstr("give either password or password-file"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, password-file: /nope}\n"),
+              HasSubstr("sparkplug.password-file: cannot read '/nope'"));
+  EXPECT_THAT(config_error(net + "sparkplug: {group-id: g, qos: 1}\n"),
+              HasSubstr("gw.yaml:3: sparkplug.qos: unknown key (known here: group-id,"));
+  const std::string node = "networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        sparkplug-metrics: ";
+  EXPECT_EQ(config_error(node + "[2300h, 12345h]\n"),
+            "gw.yaml:5: networks[0].nodes[0].sparkplug-metrics[1]: '12345h' is not an object (e.g. 2300h, 6060h:0)");
+  EXPECT_THAT(config_error(node + "[\"6060h:256\"]\n"), HasSubstr("'6060h:256' is not an object"));
+  EXPECT_THAT(config_error(node + "[\"6060h:\"]\n"), HasSubstr("'6060h:' is not an object"));
+  EXPECT_THAT(config_error(node + "[speed]\n"), HasSubstr("'speed' is not an object"));
+  EXPECT_THAT(config_error(node + "[2300h, \"2300h\"]\n"), HasSubstr("sparkplug-metrics[1]: '2300h' is listed twice"));
+  EXPECT_THAT(config_error(node + "2300h\n"), HasSubstr("sparkplug-metrics: expected a list"));
+
+  // merge(): no broker at all, and a client id the native session has.
+  EXPECT_EQ(merge_error(parse_config(net + "sparkplug: {group-id: g}\n", "gw.yaml"), CliOptions{}),
+            "gw.yaml:3: sparkplug.group-id: no broker for the Sparkplug edge node: set sparkplug.uri, or turn MQTT on "
+            "(mqtt.uri or --mqtt; Sparkplug then uses the same broker)");
+  CliOptions flag;
+  flag.sparkplug_group = "g";
+  EXPECT_THAT(merge_error(parse_config(net, "gw.yaml"), flag), HasSubstr("--sparkplug g: no broker"));
+  EXPECT_THAT(merge_error(parse_config(net + "mqtt: {uri: tcp://b, client-id: same}\n"
+                                             "sparkplug: {group-id: g, client-id: same}\n",
+                                       "gw.yaml"),
+                          CliOptions{}),
+              HasSubstr("sparkplug.client-id 'same' is mqtt's as well"));
 }
 
 TEST(Config, NodeRulesAreChecked) {

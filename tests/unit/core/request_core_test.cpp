@@ -15,6 +15,7 @@
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/sdo/abort.hpp"
+#include "support/fake_networks.hpp"
 
 namespace gateway::core {
 namespace {
@@ -22,89 +23,9 @@ namespace {
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;
 
-constexpr std::uint8_t kOwnNode = 127;
-constexpr std::uint8_t kDescribed = 5;  // has the EDS below
-
-// 1000h, and 6060h (INTEGER8, limits -1..10).
-const char* kEds =
-    "[FileInfo]\nFileName=t.eds\n[DeviceInfo]\nVendorName=Test\n"
-    "[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n"
-    "[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0\n"
-    "[OptionalObjects]\nSupportedObjects=1\n1=0x6060\n"
-    "[6060]\nParameterName=Modes of operation\nObjectType=0x7\nDataType=0x0002\nAccessType=rw\n"
-    "LowLimit=-1\nHighLimit=10\nDefaultValue=0\n";
-
-struct FakeNetworks final : Networks {
-  FakeNetworks()
-      : own(canopen::od::make_gateway_dictionary(kOwnNode, canopen::od::GatewayIdentity{}, {})),
-        desc(canopen::eds::parse_device_description(kEds, "t.eds", kDescribed)) {}
-
-  std::uint32_t count() const override { return networks; }
-  std::uint8_t own_node_id(std::uint32_t) const override { return kOwnNode; }
-  const canopen::od::ObjectDictionary& own_dictionary(std::uint32_t) const override { return own; }
-  std::error_code write_own(std::uint32_t, std::uint16_t index, std::uint8_t sub,
-                            std::span<const std::uint8_t> data) override {
-    return own.write(index, sub, data);
-  }
-  const canopen::eds::DeviceDescription* description(std::uint32_t, std::uint8_t node) const override {
-    return node == kDescribed ? &desc : nullptr;
-  }
-  std::optional<canopen::can::BusState> bus_state(std::uint32_t) const override { return bus; }
-  canopen::Result<canopen::sdo::RequestId> sdo_upload(std::uint32_t, canopen::sdo::Request r) override {
-    if (queue_full) return canopen::Error{make_error_code(canopen::SdoAbort::NoSdoConnection), "queue full"};
-    pending.push_back(std::move(r));
-    return canopen::sdo::RequestId{pending.size()};
-  }
-  canopen::Result<canopen::sdo::RequestId> sdo_download(std::uint32_t, canopen::sdo::Request r,
-                                                        canopen::Bytes data) override {
-    downloaded.push_back(data);
-    return sdo_upload(1, std::move(r));
-  }
-  void send_nmt(std::uint32_t net, canopen::NmtCommand c, std::uint8_t node) override {
-    nmt.push_back({net, c, node});
-  }
-  const canopen::pdo::PdoConfig* rpdo_config(std::uint32_t, std::uint8_t, std::uint16_t) const override {
-    return nullptr;
-  }
-  std::error_code write_rpdo(std::uint32_t, std::uint8_t, std::uint16_t, std::span<const canopen::MappedValue>,
-                             const canopen::Bytes*, canopen::Bytes&) override {
-    return {};
-  }
-  void send_sync(std::uint32_t, std::optional<std::uint8_t> counter) override { syncs.push_back(counter); }
-  bool has_pdo_table(std::uint32_t, std::uint8_t node) const override { return node == kDescribed; }
-  std::error_code read_pdo_config(std::uint32_t, std::uint8_t,
-                                  std::function<void(const canopen::pdo::PdoReadReport&)>) override {
-    return {};
-  }
-  std::chrono::steady_clock::time_point now() const override { return t; }
-
-  // Answers the oldest pending transfer.
-  void answer(canopen::Bytes data = {}, std::error_code error = {}) {
-    auto r = std::move(pending.front());
-    pending.pop_front();
-    canopen::sdo::TransferResult res;
-    res.error = error;
-    res.origin = error ? canopen::sdo::Origin::Remote : canopen::sdo::Origin::None;
-    res.data = std::move(data);
-    r.on_done(std::move(res));
-  }
-
-  std::uint32_t networks = 2;
-  canopen::od::ObjectDictionary own;
-  canopen::eds::DeviceDescription desc;
-  std::optional<canopen::can::BusState> bus = canopen::can::BusState::ErrorActive;
-  bool queue_full = false;
-  std::deque<canopen::sdo::Request> pending;
-  std::vector<canopen::Bytes> downloaded;
-  struct NmtSentFrame {
-    std::uint32_t net;
-    canopen::NmtCommand command;
-    std::uint8_t node;
-  };
-  std::vector<NmtSentFrame> nmt;
-  std::vector<std::optional<std::uint8_t>> syncs;
-  std::chrono::steady_clock::time_point t{};
-};
+using test_support::FakeNetworks;
+using test_support::kDescribed;
+using test_support::kOwnNode;
 
 struct Rig {
   explicit Rig(RequestCore::Settings s = {}, std::vector<auth::TokenEntry> t = {})

@@ -120,5 +120,35 @@ TEST(MqttReplyBody, CorrelationIdIsAddedToAJsonReply) {
   EXPECT_EQ(reply_body(ok, ReplyAddress{}), ok.body);
 }
 
+// A refusal that says when to try again (the core's rate limit: 429 with
+// retry_after) carries it as an MQTT 5 user property, as HTTP's Retry-After,
+// next to "status"; other replies have none.
+TEST(MqttRequests, ARefusalWithRetryAfterCarriesItAsAUserProperty) {
+  Logger log(LogLevel::Error);
+  core::Result next;
+  MqttRequests requests("gw", {}, log, [&](core::Request, MqttRequests::Done done) { done(next); });
+  std::vector<std::pair<std::string, std::string>> props;
+  requests.set_reply_sender([&](std::string_view, std::string_view, const codec::PublishProperties& p) {
+    props.clear();
+    for (const auto& u : p.user) props.emplace_back(std::string(u.name), std::string(u.value));
+    return ReplyOutcome::sent;
+  });
+  auto msg = publish("canopen/gw/1/5/sdo/read", R"({"index":"1017","subIndex":0})");
+  msg.props.response_topic = "app/reply";
+
+  core::Problem limited;
+  limited.status = 429;
+  limited.detail = "too many requests";
+  limited.retry_after = 1;
+  next = limited;
+  requests.on_publish(msg);
+  using P = std::pair<std::string, std::string>;
+  EXPECT_EQ(props, (std::vector<P>{{"status", "429"}, {"retry-after", "1"}}));
+
+  next = core::SdoValue{canopen::Value::of_unsigned(canopen::DataType::Unsigned16, 100)};
+  requests.on_publish(msg);
+  EXPECT_EQ(props, (std::vector<P>{{"status", "200"}}));
+}
+
 }  // namespace
 }  // namespace gateway::mqtt

@@ -154,6 +154,71 @@ TEST_F(SessionTest, ConnectCarriesCleanStartWillKeepaliveAndV5Properties) {
     EXPECT_NE(rest.find(field), std::string::npos) << field;
 }
 
+// A Sparkplug edge node's CONNECT (facts A.4.1, A.4.2): clean session /
+// clean start with Session Expiry 0, and the Will (NDEATH) at QoS 1 NOT
+// retained; under MQTT 3.1.1 as under 5.
+TEST_F(SessionTest, WillQosAndRetainAreOptionsAndTheSessionIsClean) {
+  for (int version : {5, 4}) {
+    SCOPED_TRACE(version);
+    auto o = options();
+    o.mqtt_version = version;
+    o.will_topic = "spBv1.0/G/NDEATH/E";
+    o.will_qos = 1;
+    o.will_retain = false;
+    make(o);
+    out.clear();
+    ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+    s->transport_connected(out, clock.now());
+    const auto ps = packets(out);
+    ASSERT_EQ(ps.size(), 1u);
+    const std::string& b = ps[0].body;
+    EXPECT_EQ(b[6], version);
+    const auto flags = static_cast<std::uint8_t>(b[7]);
+    EXPECT_EQ(flags & 0x02, 0x02);  // clean session / clean start
+    EXPECT_EQ(flags & 0x04, 0x04);  // Will
+    EXPECT_EQ(flags & 0x18, 0x08);  // Will QoS 1
+    EXPECT_EQ(flags & 0x20, 0x00);  // Will not retained
+    if (version == 5) {
+      const std::string props = b.substr(11, static_cast<std::size_t>(b[10]));
+      EXPECT_NE(props.find(bytes({0x11, 0, 0, 0, 0})), std::string::npos);  // Session Expiry 0
+    }
+    EXPECT_NE(b.find("spBv1.0/G/NDEATH/E"), std::string::npos);
+  }
+}
+
+// An intentional disconnect (facts A.4.6): under MQTT 5 DISCONNECT carries
+// reason 0x04 "Disconnect with Will Message" when asked (the broker then
+// publishes the Will); 0 is the normal one; 3.1.1 has no reason byte at all.
+TEST_F(SessionTest, DisconnectCarriesItsReasonUnderMqtt5Only) {
+  make(options());
+  connect();
+  s->disconnect(out, Session::kDisconnectWithWill);
+  auto ps = packets(out);
+  ASSERT_EQ(ps.size(), 1u);
+  ASSERT_EQ(ps[0].type, codec::PacketType::Disconnect);
+  std::uint8_t reason = 0xFF;
+  ASSERT_EQ(codec::parse_disconnect({ps[0].type, ps[0].flags, ps[0].body}, codec::kMqtt5, reason), codec::Error::None);
+  EXPECT_EQ(reason, 0x04);
+  out.clear();
+  s->disconnect(out);
+  ps = packets(out);
+  ASSERT_EQ(ps.size(), 1u);
+  ASSERT_EQ(codec::parse_disconnect({ps[0].type, ps[0].flags, ps[0].body}, codec::kMqtt5, reason), codec::Error::None);
+  EXPECT_EQ(reason, 0x00);
+
+  auto o = options();
+  o.mqtt_version = 4;
+  make(o);
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  out.clear();
+  s->transport_connected(out, clock.now());
+  s->received(out, bytes({0x20, 0x02, 0x00, 0x00}), clock.now());
+  ASSERT_TRUE(s->up());
+  out.clear();
+  s->disconnect(out, Session::kDisconnectWithWill);
+  EXPECT_EQ(out, bytes({0xE0, 0x00}));  // 3.1.1: no reason, the broker drops the Will
+}
+
 TEST_F(SessionTest, ConnackAcceptedReportsTheBrokersLimits) {
   make(options());
   connect(connack5(0, bytes({0x21, 0x00, 20,              // Receive Maximum 20

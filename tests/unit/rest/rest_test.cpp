@@ -12,6 +12,7 @@ namespace {
 
 using namespace std::chrono_literals;
 using ::testing::HasSubstr;
+using ::testing::Not;
 namespace json = boost::json;
 using test::RestRig;
 
@@ -493,6 +494,52 @@ TEST(Rest, MetricsFamiliesInTheirOrder) {
   EXPECT_EQ(families, expected);
   EXPECT_THAT(m.body, HasSubstr("canopen_gateway_mqtt_enabled 0\n"));
   EXPECT_THAT(m.body, HasSubstr("canopen_gateway_bus_state{network=\"1\",interface=\"demo\",state=\"error-active\"} 1\n"));
+}
+
+// Issue 15 item 5: GET /api/v1/gateway carries the Sparkplug edge node's
+// session when it is configured (here without a broker: offline, the bdSeq
+// of its first CONNECT attempt, no birth yet), and /metrics its families.
+TEST(Rest, GatewayShowsTheSparkplugSessionAndItsMetrics) {
+  RestRig plain;
+  EXPECT_FALSE(plain.request("GET", "/api/v1/gateway").json().as_object().contains("sparkplug"))
+      << "only when configured";
+  EXPECT_THAT(plain.request("GET", "/metrics").body, Not(HasSubstr("canopen_gateway_sparkplug_")));
+
+  RestRig rig({}, [](Config& c) {
+    c.sparkplug.enabled = true;
+    c.sparkplug.group_id = "plant1";
+    c.sparkplug.edge_node_id = "test";
+    c.sparkplug.primary_host_id = "scada-1";
+    c.sparkplug.mqtt.server_uri = "tcp://127.0.0.1:1";  // nobody listens
+    c.sparkplug.mqtt.client_id = "test-spb";
+  });
+  rig.io.run_for(100ms);  // the first CONNECT attempt fails
+  auto g = rig.request("GET", "/api/v1/gateway");
+  ASSERT_EQ(g.status, 200) << g.body;
+  const auto& sp = g.json().as_object().at("sparkplug").as_object();
+  EXPECT_EQ(sp.at("groupId").as_string(), "plant1");
+  EXPECT_EQ(sp.at("edgeNodeId").as_string(), "test");
+  EXPECT_EQ(sp.at("state").as_string(), "offline");
+  EXPECT_FALSE(sp.at("connected").as_bool());
+  EXPECT_EQ(sp.at("bdSeq").to_number<int>(), 0) << "the first CONNECT's (no state dir: starts at 0)";
+  EXPECT_TRUE(sp.at("lastRebirth").is_null());
+  EXPECT_EQ(sp.at("primaryHost").as_object().at("id").as_string(), "scada-1");
+  EXPECT_FALSE(sp.at("primaryHost").as_object().at("online").as_bool());
+  EXPECT_EQ(sp.at("messagesPublished").to_number<int>(), 0);
+  EXPECT_EQ(sp.at("commandsReceived").to_number<int>(), 0);
+
+  const auto m = rig.request("GET", "/metrics").body;
+  EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_connected 0\n"));
+  EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_online 0\n"));
+  EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_bdseq 0\n"));
+  for (const char* type : {"NBIRTH", "NDEATH", "DBIRTH", "DDEATH", "NDATA", "DDATA"})
+    EXPECT_THAT(m, HasSubstr(std::string("canopen_gateway_sparkplug_messages_published_total{type=\"") + type +
+                             "\"} 0\n"));
+  for (const char* family : {"canopen_gateway_sparkplug_rebirths_total 0\n", "canopen_gateway_sparkplug_commands_total 0\n",
+                             "canopen_gateway_sparkplug_dropped_total 0\n",
+                             "canopen_gateway_sparkplug_reconnects_total 0\n",
+                             "canopen_gateway_sparkplug_published_bytes_total 0\n"})
+    EXPECT_THAT(m, HasSubstr(family));
 }
 
 }  // namespace

@@ -254,6 +254,28 @@ TEST(EdgeSession, NcmdRebirthRepeatsTheBirthsWithTheSameBdSeq) {
   EXPECT_EQ(r.store.current(), c.bd_seq) << "no new bdSeq without a CONNECT";
 }
 
+// The owner's own rebirth (after it dropped DATA under backpressure, a seq
+// gap hosts cannot repair, facts A.6): the same birth sequence as an NCMD
+// rebirth, same bdSeq; nothing before the births or when offline.
+TEST(EdgeSession, OwnersRebirthRepeatsTheBirthsOnlyWhenBorn) {
+  Rig r({}, "scada");
+  r.session.device_online(r.out, "d1", drive_metrics(), kT0);
+  r.session.rebirth(r.out, kT0);
+  EXPECT_TRUE(r.take().empty()) << "offline";
+  const auto c = r.connect(kT0);
+  r.take();
+  r.session.rebirth(r.out, kT0);
+  EXPECT_TRUE(r.take().empty()) << "waiting for the Primary Host";
+  r.session.received(r.out, "spBv1.0/STATE/scada", state_json(true, kT0), kT0);
+  r.take();
+  r.session.rebirth(r.out, kT0 + 5);
+  const auto out = r.take();
+  ASSERT_EQ(topics(out), (std::vector<std::string>{"spBv1.0/plant1/NBIRTH/gw1", "spBv1.0/plant1/DBIRTH/gw1/d1"}));
+  EXPECT_EQ(parse(out[0].payload).seq(), 0U);
+  EXPECT_EQ(bdseq_of(parse(out[0].payload)), c.bd_seq);
+  EXPECT_EQ(r.session.last_rebirth(), kT0 + 5);
+}
+
 TEST(EdgeSession, NcmdRebirthFalseDoesNothing) {
   Rig r;
   r.connect(kT0);

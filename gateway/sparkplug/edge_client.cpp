@@ -1,0 +1,479 @@
+#include "sparkplug/edge_client.hpp"
+
+#include <boost/asio/post.hpp>
+#include <boost/asio/ssl/context.hpp>
+#include <boost/asio/steady_timer.hpp>
+
+#include "metrics/metrics.hpp"
+#include "metrics/registry.hpp"
+#include "mqtt/mqtt_codec.hpp"
+#include "mqtt/mqtt_connection.hpp"
+#include "mqtt/publisher.hpp"  // normalize_server_uri
+#include "mqtt/session.hpp"
+
+namespace gateway::sparkplug {
+namespace {
+
+namespace asio = boost::asio;
+namespace codec = mqtt::codec;
+
+constexpr const char* kTypeNames[EdgeClient::kTypes] = {"NBIRTH", "NDEATH", "DBIRTH", "DDEATH", "NDATA", "DDATA"};
+
+// Largest packet accepted from the broker (commands, STATE).
+constexpr std::uint32_t kMaxIncomingPacket = 1u << 20;
+
+mqtt::Session::Options session_options(const mqtt::MqttConfig& c) {
+  mqtt::Session::Options o;
+  o.mqtt_version = c.mqtt_version;
+  o.client_id = c.client_id;
+  o.username = c.username;
+  o.password = c.password;
+  o.will_qos = 1;         // facts A.4.2: NDEATH Will QoS 1, not retained
+  o.will_retain = false;  // (topic and payload: set_will() per CONNECT)
+  o.keepalive = c.keepalive;
+  o.connect_timeout = c.connect_timeout;
+  o.maximum_packet_size = kMaxIncomingPacket;
+  return o;
+}
+
+// The message type of a topic spBv1.0/G/<TYPE>/E[/D] under `prefix`.
+std::optional<EdgeClient::Type> type_of(std::string_view topic, std::string_view prefix) {
+  if (!topic.starts_with(prefix)) return std::nullopt;
+  topic.remove_prefix(prefix.size());
+  const auto type = topic.substr(0, topic.find('/'));
+  for (std::size_t i = 0; i < EdgeClient::kTypes; ++i)
+    if (type == kTypeNames[i]) return static_cast<EdgeClient::Type>(i);
+  return std::nullopt;
+}
+
+}  // namespace
+
+const char* state_name(EdgeSession::State s) {
+  switch (s) {
+    case EdgeSession::State::Offline: return "offline";
+    case EdgeSession::State::WaitingForHost: return "waiting-for-host";
+    case EdgeSession::State::Born: return "online";
+    case EdgeSession::State::Stopping: return "stopping";
+  }
+  return "offline";
+}
+
+const char* EdgeClient::type_name(Type t) { return kTypeNames[static_cast<std::size_t>(t)]; }
+
+struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::SessionEvents {
+  Impl(asio::io_context& io_ctx, EdgeClientConfig c, Logger& l)
+      : io(io_ctx), cfg(std::move(c)), log(l), store(cfg.state_dir), edge(cfg.session, store),
+        retry_timer(io_ctx), session_timer(io_ctx), session(session_options(cfg.mqtt), *this) {
+    uri = mqtt::normalize_server_uri(cfg.mqtt.server_uri);
+    endpoint = mqtt::parse_endpoint(uri);
+  }
+
+  asio::io_context& io;
+  EdgeClientConfig cfg;
+  Logger& log;
+  EdgeClient* owner = nullptr;  // for on_command; reset when the client goes
+  BdSeqStore store;
+  EdgeSession edge;
+  std::string uri;
+  mqtt::Endpoint endpoint;
+  std::unique_ptr<asio::ssl::context> tls_ctx;
+  asio::steady_timer retry_timer;
+  asio::steady_timer session_timer;  // at session.deadline()
+  mqtt::Session session;
+  std::shared_ptr<mqtt::MqttConnection> conn;
+  std::uint64_t conn_gen = 0;
+  bool running = false;
+  bool connected = false;
+  bool connecting = false;
+  bool closing = false;        // the EdgeSession ended the session: close once drained
+  bool rebirth_due = false;    // DATA was dropped: births again once drained
+  bool born_here = false;      // an NBIRTH went out on this connection
+  unsigned failures = 0;
+  Counters counters;
+  std::vector<Outgoing> scratch_out;  // reused by the handlers
+  std::string final_bytes;            // stop()'s NDEATH and DISCONNECT
+
+  std::uint64_t now_ms() const {
+    return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                          std::chrono::system_clock::now().time_since_epoch())
+                                          .count());
+  }
+
+  void start() {
+    if (running) return;
+    running = true;
+    connect();
+  }
+
+  bool ensure_tls() {
+    if (!endpoint.tls || tls_ctx) return true;
+    try {
+      tls_ctx = mqtt::make_tls_context(cfg.mqtt);
+      return true;
+    } catch (const std::exception& e) {
+      log.error(std::string("sparkplug: TLS setup for ") + uri + " failed: " + e.what());
+      return false;
+    }
+  }
+
+  void connect() {
+    if (!running || connected || connecting) return;
+    if (!ensure_tls()) {
+      schedule_retry();
+      return;
+    }
+    // A new bdSeq for every CONNECT attempt, stored before it is sent (facts A.5).
+    auto params = edge.connect_params();
+    if (!params.store_note.empty()) log.warn("sparkplug: " + params.store_note);
+    session.set_will(std::move(params.will_topic), std::move(params.will_payload));
+    if (auto e = session.open(std::chrono::steady_clock::now()); e != codec::Error::None) {
+      log.error(std::string("sparkplug: cannot build CONNECT (client id, user, ids not UTF-8?): ") +
+                codec::to_string(e));
+      schedule_retry();
+      return;
+    }
+    connecting = true;
+    closing = false;
+    const std::uint64_t c = ++conn_gen;
+    std::weak_ptr<Impl> weak = weak_from_this();
+    auto current = [weak](std::uint64_t gen) -> std::shared_ptr<Impl> {
+      auto self = weak.lock();
+      return self && self->conn && self->conn_gen == gen ? self : nullptr;
+    };
+    mqtt::MqttConnection::Callbacks cb;
+    cb.on_open = [current, c] {
+      if (auto self = current(c)) {
+        self->session.transport_connected(self->conn->out(), std::chrono::steady_clock::now());
+        self->conn->flush();
+      }
+    };
+    cb.on_data = [current, c](std::string_view bytes) {
+      if (auto self = current(c)) {
+        auto keep = self->conn;  // the session may drop the connection meanwhile
+        self->session.received(keep->out(), bytes, std::chrono::steady_clock::now());
+        if (self->conn == keep) keep->flush();  // PUBACKs, births, answers to commands
+      }
+    };
+    cb.on_drained = [current, c] {
+      if (auto self = current(c)) self->on_drained();
+    };
+    cb.on_closed = [current, c](const std::string& why) {
+      if (auto self = current(c)) self->session.transport_closed(why);
+    };
+    conn = std::make_shared<mqtt::MqttConnection>(io, tls_ctx.get(), cfg.mqtt.verify_server, std::move(cb));
+    conn->open(endpoint);
+  }
+
+  void drop_connection() {
+    if (!conn) return;
+    conn->close();
+    conn.reset();
+  }
+
+  void schedule_retry() {
+    if (!running) return;
+    const auto delay = mqtt::reconnect_delay(cfg.mqtt, failures);
+    ++failures;
+    retry_timer.expires_after(delay);
+    retry_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
+      auto self = weak.lock();
+      if (ec || !self) return;
+      self->connect();
+    });
+  }
+
+  // The connection is over, whoever ended it: the EdgeSession starts over
+  // (a new bdSeq and births on the next connection).
+  void went_down() {
+    connected = false;
+    connecting = false;
+    closing = false;
+    rebirth_due = false;
+    born_here = false;
+    edge.lost();
+  }
+
+  // --- carrying out the EdgeSession's list ---------------------------------
+
+  void send(std::vector<Outgoing>& out) {
+    if (!connected || !conn) {
+      for (const auto& o : out) {
+        if (o.kind != Outgoing::Kind::Publish) continue;
+        const auto t = type_of(o.topic, edge.topic_prefix());
+        if (t == Type::NDATA || t == Type::DDATA) ++counters.dropped;
+      }
+      out.clear();
+      return;
+    }
+    for (auto& o : out) {
+      if (!conn) break;  // the session ended inside this loop
+      switch (o.kind) {
+        case Outgoing::Kind::Subscribe: {
+          const codec::Subscription sub[] = {{o.topic, o.qos, false}};
+          if (auto r = session.subscribe(conn->out(), sub); !r.ok())
+            log.warn("sparkplug: cannot subscribe to '" + o.topic + "' (id not UTF-8?)");
+          break;
+        }
+        case Outgoing::Kind::Publish: publish(o); break;
+        case Outgoing::Kind::Disconnect:
+          // The EdgeSession ended the session (Primary Host offline): the
+          // DISCONNECT goes out, the connection closes once it drained (or
+          // the broker closes it), and the client connects again.
+          session.disconnect(conn->out(), session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);
+          closing = true;
+          break;
+      }
+    }
+    out.clear();
+    if (conn) conn->flush();
+  }
+
+  void publish(const Outgoing& o) {
+    const auto t = type_of(o.topic, edge.topic_prefix());
+    const bool data = t == Type::NDATA || t == Type::DDATA;
+    if (data && (rebirth_due || conn->pending() > cfg.max_buffered)) {
+      // Backpressure: the births that follow the drain carry these values.
+      ++counters.dropped;
+      if (!rebirth_due) log.warn("sparkplug: the broker does not keep up; dropping DATA until a rebirth");
+      rebirth_due = true;
+      return;
+    }
+    bool ok = false;
+    if (o.qos > 0) {
+      ok = session.publish_control(conn->out(), o.topic, o.payload, o.retain);
+    } else {
+      ok = session.publish(conn->out(), 0, o.topic, o.payload, 0, o.retain).ok();
+    }
+    if (!ok) {
+      log.warn("sparkplug: cannot send to '" + o.topic + "' (over the broker's maximum packet size?)");
+      if (data) ++counters.dropped;
+      return;
+    }
+    ++counters.published;
+    counters.bytes += o.payload.size();
+    if (t) ++counters.published_by_type[static_cast<std::size_t>(*t)];
+    if (t == Type::NBIRTH) {
+      if (born_here) ++counters.rebirths;
+      born_here = true;
+    }
+  }
+
+  // Every byte reached the kernel (possibly from inside a flush()): what
+  // closes the connection or writes again runs as a handler of its own.
+  void on_drained() {
+    session.wrote(std::chrono::steady_clock::now());
+    if (!closing && !rebirth_due) return;
+    asio::post(io, [weak = weak_from_this(), gen = conn_gen] {
+      auto self = weak.lock();
+      if (!self || !self->conn || self->conn_gen != gen) return;
+      if (self->closing) {
+        self->end_connection("session ended by the edge node");
+        return;
+      }
+      if (self->rebirth_due && self->conn->pending() == 0) {
+        self->rebirth_due = false;
+        self->log.info("sparkplug: the broker caught up; births again");
+        self->edge.rebirth(self->scratch_out, self->now_ms());
+        self->send(self->scratch_out);
+      }
+    });
+  }
+
+  // Closes the connection ourselves and connects again with backoff.
+  void end_connection(const std::string& why) {
+    session.close();
+    drop_connection();
+    if (connected) log.warn("sparkplug: disconnected from " + uri + ": " + why);
+    went_down();
+    schedule_retry();
+  }
+
+  // --- SessionEvents ------------------------------------------------------
+
+  void on_deadline_changed() override {
+    const auto d = session.deadline();
+    if (!d) {
+      session_timer.cancel();
+      return;
+    }
+    session_timer.expires_at(*d);
+    session_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
+      auto self = weak.lock();
+      if (ec || !self) return;
+      std::string unused;
+      const auto c = self->conn;
+      self->session.on_timer(c ? c->out() : unused, std::chrono::steady_clock::now());
+      if (self->conn) self->conn->flush();
+    });
+  }
+
+  void on_connected(const mqtt::BrokerLimits& limits) override {
+    connecting = false;
+    if (!running) {
+      session.close();
+      drop_connection();
+      return;
+    }
+    connected = true;
+    failures = 0;
+    born_here = false;
+    if (counters.connects++ > 0) ++counters.reconnects;
+    log.info("sparkplug: edge node " + cfg.session.group_id + "/" + cfg.session.edge_node_id + " connected to " +
+             uri + " with MQTT " + (limits.version == codec::kMqtt5 ? "5" : "3.1.1") + ", bdSeq " +
+             std::to_string(edge.bd_seq().value_or(0)) +
+             (cfg.session.primary_host_id.empty() ? std::string()
+                                                  : ", waiting for Primary Host " + cfg.session.primary_host_id));
+    edge.connected(scratch_out, now_ms());
+    send(scratch_out);
+  }
+
+  void on_refused(std::uint8_t code, bool fell_back) override {
+    connecting = false;
+    drop_connection();
+    went_down();
+    if (!running) return;
+    if (fell_back) {
+      log.warn("sparkplug: broker " + uri + " refuses MQTT 5, falling back to 3.1.1");
+      connect();
+      return;
+    }
+    if (failures == 0 || log.enabled(LogLevel::Debug))
+      log.warn("sparkplug: connect to " + uri + " refused (code " + std::to_string(code) + "), retrying");
+    schedule_retry();
+  }
+
+  void on_lost(const std::string& why, bool was_up) override {
+    drop_connection();
+    if (!was_up) {
+      connecting = false;
+      went_down();
+      if (!running) return;
+      if (failures == 0 || log.enabled(LogLevel::Debug))
+        log.warn("sparkplug: connect to " + uri + " failed: " + why + ", retrying");
+      schedule_retry();
+      return;
+    }
+    if (connected && !closing) log.warn("sparkplug: connection to " + uri + " lost: " + why);
+    went_down();
+    schedule_retry();
+  }
+
+  void on_publish(const codec::Publish& p) override {
+    if (!running || !connected) return;
+    const auto t = std::string_view(p.topic);
+    const auto& prefix = edge.topic_prefix();
+    if (t.starts_with(prefix) && (t.substr(prefix.size()).starts_with("NCMD/") ||
+                                  t.substr(prefix.size()).starts_with("DCMD/")))
+      ++counters.commands;
+    auto cmd = edge.received(scratch_out, p.topic, p.payload, now_ms());
+    send(scratch_out);
+    if (!cmd) return;
+    if (!cmd->refused.empty()) {
+      std::string names;
+      for (const auto& n : cmd->refused) names += (names.empty() ? "" : ", ") + n;
+      log.warn("sparkplug: " + std::string(cmd->device.empty() ? "NCMD" : "DCMD for " + cmd->device) +
+               ": unknown metrics or values that do not fit their type: " + names);
+    }
+    if (owner && owner->on_command && !cmd->items.empty()) owner->on_command(std::move(*cmd));
+  }
+
+  void on_acked(std::uint64_t) override {}
+  void on_rejected(std::uint64_t, std::uint8_t reason) override {
+    log.warn("sparkplug: broker refused a message, reason " + std::to_string(reason));
+  }
+  void on_subscribe_refused(std::uint8_t code) override {
+    log.warn("sparkplug: broker refused a subscription (NCMD/DCMD/STATE), code " + std::to_string(code));
+  }
+  void on_batch_end(bool) override {}
+
+  void stop(std::chrono::milliseconds timeout) {
+    if (!running) return;
+    running = false;
+    retry_timer.cancel();
+    session_timer.cancel();
+    if (conn && connected && !closing) {
+      // NDEATH and DISCONNECT in one synchronous write (facts A.4.6).
+      std::vector<Outgoing> out;
+      edge.stop(out, now_ms());
+      final_bytes.clear();
+      for (const auto& o : out) {
+        if (o.kind == Outgoing::Kind::Publish) {
+          session.publish_final(final_bytes, o.topic, o.payload, o.qos, o.retain);
+          ++counters.published;
+          counters.bytes += o.payload.size();
+          if (auto t = type_of(o.topic, edge.topic_prefix()))
+            ++counters.published_by_type[static_cast<std::size_t>(*t)];
+        } else if (o.kind == Outgoing::Kind::Disconnect) {
+          session.disconnect(final_bytes,
+                             session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);
+        }
+      }
+      if (!conn->finish(final_bytes, timeout))
+        log.warn("sparkplug: disconnect did not complete; the broker sends the Will (NDEATH)");
+      conn.reset();
+    } else {
+      drop_connection();
+    }
+    session.close();
+    went_down();
+  }
+};
+
+EdgeClient::EdgeClient(boost::asio::io_context& io, EdgeClientConfig cfg, Logger& log)
+    : impl_(std::make_shared<Impl>(io, std::move(cfg), log)) {
+  impl_->owner = this;
+}
+
+EdgeClient::~EdgeClient() {
+  impl_->owner = nullptr;
+  impl_->stop(std::chrono::seconds(1));
+}
+
+void EdgeClient::start() { impl_->start(); }
+void EdgeClient::stop(std::chrono::milliseconds timeout) { impl_->stop(timeout); }
+EdgeSession& EdgeClient::edge() { return impl_->edge; }
+const EdgeSession& EdgeClient::edge() const { return impl_->edge; }
+void EdgeClient::send(std::vector<Outgoing>& out) { impl_->send(out); }
+std::uint64_t EdgeClient::now_ms() const { return impl_->now_ms(); }
+bool EdgeClient::connected() const { return impl_->connected; }
+int EdgeClient::mqtt_version() const { return impl_->connected ? impl_->session.version() : 0; }
+EdgeClient::Counters EdgeClient::counters() const { return impl_->counters; }
+const EdgeClientConfig& EdgeClient::config() const { return impl_->cfg; }
+
+void register_metrics(metrics::Registry& r, const std::unique_ptr<EdgeClient>& client) {
+  using metrics::Value;
+  auto counter = [&client](auto f) {
+    return [&client, f]() -> Value { return client ? Value(f(client->counters())) : Value(std::uint64_t{0}); };
+  };
+  r.gauge_fn("canopen_gateway_sparkplug_connected", "1 while the Sparkplug B edge node is connected to its broker.",
+             {}, [&client] { return Value(client && client->connected()); });
+  r.gauge_fn("canopen_gateway_sparkplug_online",
+             "1 while the Sparkplug B edge node is born (NBIRTH and every DBIRTH sent on this connection).", {},
+             [&client] { return Value(client && client->edge().state() == EdgeSession::State::Born); });
+  r.gauge_fn("canopen_gateway_sparkplug_bdseq",
+             "The bdSeq of the Sparkplug B edge node's latest CONNECT (its Will and NBIRTH); -1 before the first.",
+             {}, [&client]() -> Value {
+               const auto b = client ? client->edge().bd_seq() : std::nullopt;
+               return b ? Value(std::int64_t{*b}) : Value(std::int64_t{-1});
+             });
+  static constexpr std::string_view msgs = "canopen_gateway_sparkplug_messages_published_total";
+  static constexpr std::string_view msgs_help = "Sparkplug B messages published by the edge node, by message type.";
+  for (std::size_t i = 0; i < EdgeClient::kTypes; ++i)
+    r.counter_fn(msgs, msgs_help, {{"type", kTypeNames[i]}},
+                 counter([i](const EdgeClient::Counters& c) { return c.published_by_type[i]; }));
+  r.counter_fn("canopen_gateway_sparkplug_published_bytes_total",
+               "Payload bytes of the Sparkplug B messages published.", {},
+               counter([](const EdgeClient::Counters& c) { return c.bytes; }));
+  r.counter_fn("canopen_gateway_sparkplug_rebirths_total",
+               "Sparkplug B birth sequences repeated on a connection (NCMD rebirth, or after dropped DATA).", {},
+               counter([](const EdgeClient::Counters& c) { return c.rebirths; }));
+  r.counter_fn("canopen_gateway_sparkplug_commands_total", "Sparkplug B NCMD/DCMD messages received.", {},
+               counter([](const EdgeClient::Counters& c) { return c.commands; }));
+  r.counter_fn("canopen_gateway_sparkplug_dropped_total",
+               "Sparkplug B NDATA/DDATA dropped: not connected, or the broker did not keep up.", {},
+               counter([](const EdgeClient::Counters& c) { return c.dropped; }));
+  r.counter_fn("canopen_gateway_sparkplug_reconnects_total", "Reconnections of the Sparkplug B edge node.", {},
+               counter([](const EdgeClient::Counters& c) { return c.reconnects; }));
+}
+
+}  // namespace gateway::sparkplug
