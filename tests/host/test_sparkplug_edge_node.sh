@@ -7,14 +7,20 @@
 # (births first, one seq 0..255 without gaps, bdSeq pairs, QoS/retain,
 # metric types and properties). On top of those rules, this run must show:
 #  1. NBIRTH with `Network 1/Bus State`, then a DBIRTH for each simulated
-#     device (net1-node5, -10, -11), then DDATA flowing;
+#     device (by their names: drive-x, io-rack-1, io-rack-2), then DDATA;
 #  2. NCMD `Node Control/Rebirth` = true: NBIRTH (seq 0, same bdSeq: still one
 #     session) and every DBIRTH again (facts A.6);
 #  3. DCMD on an RPDO-mapped object (the I/O module's 6200h:1): a DDATA with
 #     the written value;
-#  4. SIGTERM: the gateway's own NDEATH with the session's bdSeq (facts A.4.6);
-#  5. a restart: a new session with bdSeq + 1 (facts A.5, kept in state-dir);
-#  6. kill -9: the broker publishes the Will, an NDEATH with that bdSeq.
+#  4. SIGTERM on MQTT 3.1.1, where DISCONNECT suppresses the Will: the
+#     gateway's own NDEATH with the session's bdSeq (facts A.4.6);
+#  5. a restart (MQTT 5 now): a new session with bdSeq + 1 (facts A.5, kept
+#     in state-dir);
+#  6. kill -9: the broker publishes the Will, an NDEATH with that bdSeq;
+#  7. a restart and SIGTERM on MQTT 5: the NDEATH and, DISCONNECT being
+#     "with Will Message" (facts A.4.6), the Will too: two, same bdSeq.
+# Steps 1-4 configure Sparkplug in the file (`sparkplug:`), 5-7 by
+# --sparkplug.
 # Runs on the host with a real mosquitto; the CAN side is the gateway's
 # simulated network.
 TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
@@ -25,7 +31,8 @@ TOOLS=${SOURCE_DIR:-$(dirname "$0")/../..}/tests/tools
 CHECK="/usr/bin/python3 $TOOLS/sparkplug_check.py"
 GROUP=plant
 GW=gw1
-DEVICES="net1-node5 net1-node10 net1-node11"
+DEVICES="drive-x io-rack-1 io-rack-2"  # the simulated nodes 5, 10, 11 by their names
+IO=io-rack-1
 CAP=$T/sparkplug.cap
 MOSQ_PORT=$(free_port)
 start_mosquitto
@@ -66,10 +73,12 @@ networks:
 mqtt:
   uri: tcp://127.0.0.1:$MOSQ_PORT
 YAML
+cp "$T/gw.yaml" "$T/gw311.yaml"
+printf 'sparkplug: {group-id: %s, mqtt-version: "3.1.1"}\n' "$GROUP" >> "$T/gw311.yaml"
 GW_ARGS="--config $T/gw.yaml --http 127.0.0.1:0 --sparkplug $GROUP"
 
 # ---- 1: births, then data ---------------------------------------------------
-start_gateway $GW_ARGS
+start_gateway --config "$T/gw311.yaml" --http 127.0.0.1:0
 # shellcheck disable=SC2046
 sp_wait 30 "births and DDATA" --min-nbirths 1 $(each_dbirth) --min-ddata 20 \
   --expect-birth-metric "/Network 1/Bus State"
@@ -88,19 +97,21 @@ pass "NCMD Node Control/Rebirth: NBIRTH with seq 0 and bdSeq $BD again, every DB
 
 # ---- 3: DCMD on an RPDO-mapped object ---------------------------------------
 # The metric's name and type as the I/O module's DBIRTH gives them (6200h:1).
-METRIC=$($CHECK --capture "$CAP" --lookup net1-node10/6200h:1) ||
-  fail "no metric with index 6200h subIndex 1 in net1-node10's DBIRTH"
+METRIC=$($CHECK --capture "$CAP" --lookup $IO/6200h:1) ||
+  fail "no metric with index 6200h subIndex 1 in the DBIRTH of $IO"
 n=$(lines)
 /usr/bin/python3 "$TOOLS/sparkplug_command.py" "$T/write.bin" "$METRIC:165"
-mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t "spBv1.0/$GROUP/DCMD/$GW/net1-node10" -f "$T/write.bin"
-sp_wait 10 "DCMD ${METRIC%=*} = 165" --from-line "$n" --expect-data-object net1-node10/6200h:1=165
+mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t "spBv1.0/$GROUP/DCMD/$GW/$IO" -f "$T/write.bin"
+sp_wait 10 "DCMD ${METRIC%=*} = 165" --from-line "$n" --expect-data-object $IO/6200h:1=165
 pass "DCMD ${METRIC%=*} (RPDO-mapped) = 165: the value came back in a DDATA"
 
 # ---- 4: clean stop: the gateway's own NDEATH --------------------------------
+grep -q "sparkplug: edge node $GROUP/$GW connected .* with MQTT 3.1.1" "$GW_LOG" ||
+  fail "the first run's Sparkplug session is not on MQTT 3.1.1: $(grep 'sparkplug:' "$GW_LOG" | head -3)"
 n=$(lines)
 stop_gateway
 sp_wait 10 "NDEATH at SIGTERM" --from-line "$n" --expect-ndeath
-pass "SIGTERM: NDEATH with bdSeq $BD before the disconnect"
+pass "SIGTERM (MQTT 3.1.1): the gateway's NDEATH with bdSeq $BD before the disconnect"
 
 # ---- 5: restart: bdSeq + 1 --------------------------------------------------
 n=$(lines)
@@ -119,6 +130,18 @@ kill -KILL "$GW_PID"
 wait "$GW_PID" 2>/dev/null || true
 sp_wait 10 "the Will after kill -9" --from-line "$n" --expect-ndeath
 pass "kill -9: the broker published the Will, NDEATH with bdSeq $NEXT"
+
+# ---- 7: MQTT 5 clean stop: NDEATH, and the Will by the DISCONNECT's reason ---
+n=$(lines)
+GW_LOG=$T/gateway3.log
+start_gateway $GW_ARGS
+sp_wait 30 "births after the second restart" --from-line "$n" --min-nbirths 1 --min-ddata 1
+grep -q "sparkplug: edge node $GROUP/$GW connected .* with MQTT 5" "$GW_LOG" ||
+  fail "the Sparkplug session is not on MQTT 5: $(grep 'sparkplug:' "$GW_LOG" | head -3)"
+n=$(lines)
+stop_gateway
+sp_wait 10 "two NDEATHs at SIGTERM on MQTT 5" --from-line "$n" --min-ndeaths 2
+pass "SIGTERM (MQTT 5): the NDEATH and the Will (DISCONNECT with Will Message), bdSeq $(( (BD + 2) % 256 ))"
 
 # ---- the whole run, by the live checker -------------------------------------
 kill -TERM "$CHECK_PID"
