@@ -103,7 +103,8 @@ n=$(lines)
 /usr/bin/python3 "$TOOLS/sparkplug_command.py" "$T/write.bin" "$METRIC:165"
 mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t "spBv1.0/$GROUP/DCMD/$GW/$IO" -f "$T/write.bin"
 sp_wait 10 "DCMD ${METRIC%=*} = 165" --from-line "$n" --expect-data-object $IO/6200h:1=165
-pass "DCMD ${METRIC%=*} (RPDO-mapped) = 165: the value came back in a DDATA"
+grep -q "audit: RPDO write by .*: net 1 node 10 " "$GW_LOG" || fail "no audit line for the DCMD's RPDO write"
+pass "DCMD ${METRIC%=*} (RPDO-mapped) = 165: an RPDO write (audited), the value came back in a DDATA"
 
 # ---- 4: clean stop: the gateway's own NDEATH --------------------------------
 grep -q "sparkplug: edge node $GROUP/$GW connected .* with MQTT 3.1.1" "$GW_LOG" ||

@@ -76,10 +76,10 @@ pass "NBIRTH: $(tail -n 1 "$T/check.out")"
 # ---- 1, 2: the device is heard: DBIRTH, then DDATA on its TPDOs ------------
 start_sim "$T/sim.log" --node 10="$IO_EDS" --heartbeat 200 --tpdo-period 100
 sp_wait 30 "DBIRTH of $DEV and DDATA" --expect-dbirth $DEV --expect-birth-object $DEV/6000h:1 \
-  --expect-birth-object $DEV/6200h:1 --expect-birth-object $DEV/1017h:0 --expect-data-object $DEV/6000h:1 \
+  --expect-birth-object $DEV/6200h:1 --expect-birth-object $DEV/1017h:0=200 --expect-data-object $DEV/6000h:1 \
   --expect-birth-metric "$DEV/Node/State" --expect-birth-metric "$DEV/EMCY/Error Code" \
   --expect-birth-metric "$DEV/Device Control/Rebirth"
-pass "DBIRTH of $DEV with 6000h:1 (TPDO), 6200h:1 (RPDO), 1017h (SDO), then DDATA on its TPDO"
+pass "DBIRTH of $DEV with 6000h:1 (TPDO), 6200h:1 (RPDO), 1017h = 200 (read by SDO), then DDATA on its TPDO"
 
 # ---- 3: DCMD on an object in no PDO: SDO download ---------------------------
 METRIC=$($CHECK --capture "$CAP" --lookup $DEV/1017h:0) || fail "no metric for 1017h in the DBIRTH of $DEV"
@@ -87,7 +87,7 @@ n=$(lines)
 /usr/bin/python3 "$TOOLS/sparkplug_command.py" "$T/write.bin" "$METRIC:300"
 mosquitto_pub -h 127.0.0.1 -p $MOSQ_PORT -t "spBv1.0/$GROUP/DCMD/$GW/$DEV" -f "$T/write.bin"
 sp_wait 10 "DCMD ${METRIC%=*} = 300" --from-line "$n" --expect-data-object $DEV/1017h:0=300
-grep -q "audit: SDO write" "$GW_LOG" || fail "no audit line for the DCMD's SDO write"
+grep -q "audit: SDO write by .*: net 1 node 10 .* = 300: ok" "$GW_LOG" || fail "no audit line for the DCMD's SDO write"
 pass "DCMD ${METRIC%=*} = 300: SDO download (audited), the value came back in a DDATA"
 
 # ---- 4: the device process dies: DDEATH -------------------------------------
@@ -106,6 +106,7 @@ pass "device back: DBIRTH of $DEV again, DDATA again"
 n=$(lines)
 stop_gateway
 sp_wait 10 "NDEATH at the stop" --from-line "$n" --expect-ndeath
+pass "clean stop: NDEATH"
 kill -KILL "$SIM_PID" 2>/dev/null || true
 kill -TERM "$CHECK_PID"
 rc=0

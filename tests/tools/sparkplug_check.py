@@ -182,7 +182,7 @@ class Checker:
         self.birth_metrics = set()   # (device, name) seen in a DBIRTH (from --from-line on)
         self.data_seen = []          # (device, name, value) of DDATA metrics (from --from-line on)
         self.sessions = {}           # "G/E" -> [bdSeq of each NBIRTH that opened a session]
-        self.objects = {}            # (device, (index, subIndex)) -> (name, datatype), latest DBIRTH
+        self.objects = {}            # (device, (index, subIndex)) -> (name, datatype, value), latest DBIRTH
         self.out = sys.stdout
 
     # ---- reporting -------------------------------------------------------
@@ -446,7 +446,7 @@ class Checker:
             if device is not None:
                 obj = self.check_properties(topic, m)
                 if obj is not None:
-                    self.objects[(device, obj)] = (m.name, m.datatype)
+                    self.objects[(device, obj)] = (m.name, m.datatype, metric_value(m))
         return {"names": names, "aliases": aliases}
 
     def check_value(self, topic, m, datatype, label, birth):
@@ -569,9 +569,13 @@ class Checker:
             if (dev, name) not in self.birth_metrics:
                 out.append("no %s with metric %r" % ("DBIRTH of " + dev if dev else "NBIRTH", name))
         for spec in a.expect_birth_object:
-            dev, obj = parse_object(spec)
-            if (dev, obj) not in self.objects:
-                out.append("no DBIRTH of %s with a metric for %04Xh:%d" % (dev, obj[0], obj[1]))
+            address, eq, want = spec.partition("=")
+            dev, obj = parse_object(address)
+            born = self.objects.get((dev, obj))
+            if born is None or (eq and not value_matches(born[2], want)):
+                out.append("no DBIRTH of %s with a metric for %04Xh:%d%s%s" % (
+                    dev, obj[0], obj[1], " = " + want if eq else "",
+                    " (it has %s)" % value_text(born[2]) if born is not None else ""))
         specs = [(spec, spec.partition("/")[0], spec.partition("/")[2]) for spec in a.expect_data]
         for spec in a.expect_data_object:
             dev, obj = parse_object(spec.partition("=")[0])
@@ -708,8 +712,9 @@ def main(argv=None):
                    help="a DBIRTH of DEVICE has the metric (DEVICE empty: an NBIRTH)")
     g.add_argument("--expect-data", action="append", default=[], metavar="DEVICE/METRIC[=VALUE]",
                    help="a DDATA of DEVICE carries the metric, with that value if given (DEVICE empty: NDATA)")
-    g.add_argument("--expect-birth-object", action="append", default=[], metavar="DEVICE/INDEXh:SUB",
-                   help="a DBIRTH of DEVICE has a metric for that object (properties index, subIndex)")
+    g.add_argument("--expect-birth-object", action="append", default=[], metavar="DEVICE/INDEXh:SUB[=VALUE]",
+                   help="the latest DBIRTH of DEVICE has a metric for that object (properties index, subIndex), "
+                        "with that value if given")
     g.add_argument("--expect-data-object", action="append", default=[], metavar="DEVICE/INDEXh:SUB[=VALUE]",
                    help="a DDATA of DEVICE carries the metric born for that object, with that value if given")
     ap.add_argument("--lookup", metavar="DEVICE/INDEXh:SUB",

@@ -233,12 +233,14 @@ class CheckerTest(unittest.TestCase):
         b.nbirth(0)
         b.dbirth("pump")
         b.ddata("pump", 12)
-        rc, violations, s = self.run_checker(b.lines, "--expect-birth-object", "pump/6200h:0",
+        rc, violations, s = self.run_checker(b.lines, "--expect-birth-object", "pump/6200h:0=7",
+                                             "--expect-birth-object", "pump/1018h:4=null",
                                              "--expect-data-object", "pump/0x6000:1=12")
         self.assertEqual((rc, s["unmet"]), (0, []))
         rc, _, s = self.run_checker(b.lines, "--expect-birth-object", "pump/6200h:1",
+                                    "--expect-birth-object", "pump/6200h:0=8",
                                     "--expect-data-object", "pump/6000h:1=13")
-        self.assertEqual((rc, len(s["unmet"])), (2, 2))
+        self.assertEqual((rc, len(s["unmet"])), (2, 3))
         path = os.path.join(self.tmp.name, "capture.txt")
         r = subprocess.run([sys.executable, CHECKER, "--capture", path, "--lookup", "pump/6000h:1"],
                            capture_output=True, text=True)
