@@ -20,7 +20,8 @@
 #  7. a restart and SIGTERM on MQTT 5: the NDEATH and, DISCONNECT being
 #     "with Will Message" (facts A.4.6), the Will too: two, same bdSeq.
 # Steps 1-4 configure Sparkplug in the file (`sparkplug:`), 5-7 by
-# --sparkplug.
+# --sparkplug, with aliases (births with name and alias, DATA by alias only,
+# aliases unique over the edge node: facts A.7).
 # Runs on the host with a real mosquitto; the CAN side is the gateway's
 # simulated network.
 TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
@@ -75,6 +76,8 @@ mqtt:
 YAML
 cp "$T/gw.yaml" "$T/gw311.yaml"
 printf 'sparkplug: {group-id: %s, mqtt-version: "3.1.1"}\n' "$GROUP" >> "$T/gw311.yaml"
+# Runs 2 and 3: aliases on; --sparkplug's group wins over the file's.
+printf 'sparkplug: {group-id: other, aliases: true}\n' >> "$T/gw.yaml"
 GW_ARGS="--config $T/gw.yaml --http 127.0.0.1:0 --sparkplug $GROUP"
 
 # ---- 1: births, then data ---------------------------------------------------
@@ -123,7 +126,9 @@ sp_wait 30 "births after the restart" --from-line "$n" --min-nbirths 1 $(each_db
 NEXT=$(( (BD + 1) % 256 ))
 [ "$(summary sessions)" = "{\"$GROUP/$GW\": [$BD, $NEXT]}" ] ||
   fail "after the restart the sessions' bdSeqs are $(summary sessions), not [$BD, $NEXT]"
-pass "restart: a new session with bdSeq $NEXT"
+tail -n +"$((n + 1))" "$CAP" | $CHECK --capture - --decode 2>&1 | grep -q '"born_name"' ||
+  fail "no DDATA by alias in the run with sparkplug.aliases: true"
+pass "restart: a new session with bdSeq $NEXT (--sparkplug over the file's group; DDATA by alias)"
 
 # ---- 6: kill -9: the broker publishes the Will ------------------------------
 n=$(lines)

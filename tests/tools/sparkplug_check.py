@@ -110,21 +110,23 @@ def generate_module(proto_path, workdir):
         sys.path.remove(workdir)
 
 
-def metric_value(m):
+def metric_value(m, datatype=None):
     """The value as Python sees it: None for null, else the set oneof field,
-    signed types from their two's complement (facts A.7)."""
+    signed types from their two's complement (facts A.7). datatype: the
+    born one, for DATA metrics (which carry none)."""
+    datatype = m.datatype if datatype is None else datatype
     if m.HasField("is_null") and m.is_null:
         return None
     field = m.WhichOneof("value")
     if field is None:
         return None
     v = getattr(m, field)
-    if field == "int_value" and m.datatype in (INT8, INT16, INT32):
-        w = WIDTH[m.datatype]
+    if field == "int_value" and datatype in (INT8, INT16, INT32):
+        w = WIDTH[datatype]
         v &= (1 << w) - 1
         if v >= 1 << (w - 1):
             v -= 1 << w
-    elif field == "long_value" and m.datatype == INT64 and v >= 1 << 63:
+    elif field == "long_value" and datatype == INT64 and v >= 1 << 63:
         v -= 1 << 64
     elif field == "bytes_value":
         v = v.hex()
@@ -244,6 +246,7 @@ class Checker:
         counting = self.line_no > self.args.from_line
         if counting:
             self.counts[mtype] = self.counts.get(mtype, 0) + 1
+        self.born_types = {}  # DATA metric's position -> (born name, born datatype), filled by data()
         self.check(topic, group, mtype, edge, device, p, qos, retain, recv_time, counting)
         if self.args.decode:  # after the checks: DATA values typed as their birth says
             self.emit(self.describe(topic, mtype, device, p, qos, retain))
@@ -505,7 +508,7 @@ class Checker:
         else:
             d = st.devices[device]
             known, known_aliases = d["names"], d["aliases"]
-        for m in p.metrics:
+        for pos, m in enumerate(p.metrics):
             if m.HasField("alias"):
                 name = known_aliases.get(m.alias)
                 if name is None:
@@ -529,10 +532,10 @@ class Checker:
             dt = known[name]
             if m.HasField("datatype") and m.datatype != dt:
                 self.violation("value-type", topic, "%r born as datatype %d, DATA says %d" % (name, dt, m.datatype))
-            m.datatype = dt  # for metric_value(): the born type
             self.check_value(topic, m, dt, repr(name), birth=False)
+            self.born_types[pos] = (name, dt)
             if counting:
-                self.data_seen.append((device or "", name, metric_value(m)))
+                self.data_seen.append((device or "", name, metric_value(m, dt)))
 
     def describe(self, topic, mtype, device, p, qos, retain):
         d = {"event": "message", "line": self.line_no, "type": mtype, "topic": topic, "qos": qos,
@@ -546,8 +549,11 @@ class Checker:
         d["metrics"] = [{k: v for k, v in (("name", m.name if m.HasField("name") else None),
                                            ("alias", m.alias if m.HasField("alias") else None),
                                            ("datatype", m.datatype if m.HasField("datatype") else None),
-                                           ("value", metric_value(m)))
-                         if v is not None or k == "value"} for m in p.metrics]
+                                           ("value", metric_value(m, self.born_types.get(pos, (0, None))[1])))
+                         if v is not None or k == "value"} for pos, m in enumerate(p.metrics)]
+        for pos, out in enumerate(d["metrics"]):
+            if pos in self.born_types and "name" not in out:
+                out["born_name"] = self.born_types[pos][0]  # an aliased DATA metric's name, from its birth
         for m, out in zip(p.metrics, d["metrics"]):
             for key, v in zip(m.properties.keys, m.properties.values):
                 if key in ("index", "subIndex") and v.WhichOneof("value") == "int_value":

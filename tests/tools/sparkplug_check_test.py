@@ -205,6 +205,13 @@ class CheckerTest(unittest.TestCase):
         b.ddata("pump", 9, alias=2)
         rc, violations, s = self.run_checker(b.lines, "--expect-data", "pump/Speed=9")
         self.assertEqual((rc, violations, s["unmet"]), (0, [], []))
+        b.ddata("pump", -9, alias=2)
+        path = os.path.join(self.tmp.name, "capture.txt")
+        self.run_checker(b.lines)
+        r = subprocess.run([sys.executable, CHECKER, "--capture", path, "--decode"], capture_output=True, text=True)
+        last = [e for e in map(json.loads, r.stdout.splitlines()) if e["event"] == "message"][-1]
+        # As on the wire (alias, no name or datatype), typed and named by the birth.
+        self.assertEqual(last["metrics"], [{"alias": 2, "value": -9, "born_name": "Speed"}])
 
     def test_bdseq_wraps_from_255_to_0(self):
         b = Builder(self.pb)
