@@ -15,6 +15,7 @@ PACKAGES=(
   libyaml-cpp-dev libssl-dev openssl
   # broker and CAN tools for tests and the demo
   mosquitto mosquitto-clients can-utils iproute2 python3 python3-can python3-paho-mqtt
+  python3-protobuf  # tests/tools/sparkplug_check.py decodes Sparkplug payloads with code protoc generates
   # SocketCAN without host kernel support: user-mode Linux ships vcan & co.
   user-mode-linux kmod
   # dashboard browser test (tests/browser): Debian's headless Chromium, driven by playwright-core from npm
