@@ -291,6 +291,31 @@ async function loadGateway() {
     el('option', { value: n.network, text: `${n.network}: ${n.interface}`, selected: n.network === state.net })));
   $('#net-select-wrap').hidden = state.networks.length < 2;
   renderMeta();
+  renderSparkplug();
+}
+
+// The Sparkplug B edge node's session (GET /gateway `sparkplug`, only when
+// it is enabled): born (online) is healthy, waiting for the Primary Host a
+// warning, anything else means SCADA sees this gateway as dead.
+const SPARKPLUG_LEVEL = { online: 'ok', 'waiting-for-host': 'warn' };
+
+function renderSparkplug() {
+  const s = state.gateway && state.gateway.sparkplug;
+  const p = $('#spb-state');
+  p.hidden = !s;
+  if (!s) return;
+  p.dataset.level = SPARKPLUG_LEVEL[s.state] || 'bad';
+  p.dataset.state = `sparkplug-${s.state}`;
+  p.textContent = `sparkplug: ${s.state}`;
+  const host = s.primaryHost ? `; primary host ${s.primaryHost.id} ${s.primaryHost.online ? 'online' : 'offline'}` : '';
+  p.title = `Sparkplug B edge node ${s.groupId}/${s.edgeNodeId}: ${s.state}; bdSeq ${s.bdSeq ?? '–'}; ` +
+    `last rebirth ${s.lastRebirth ?? 'none'}${host}; ${s.messagesPublished} messages published`;
+}
+
+async function refreshSparkplug() {
+  const gw = await api('GET', '/gateway');
+  if (state.gateway) state.gateway.sparkplug = gw.sparkplug;
+  renderSparkplug();
 }
 
 async function loadNetwork() {
@@ -1059,6 +1084,8 @@ function start() {
   setInterval(() => { renderAges(); renderMeta(); }, 500);
   // Counters and bus facts are cheap to poll; everything else arrives live.
   setInterval(() => { if (state.wsOpen) loadNetwork().catch(() => {}); }, 10_000);
+  // The Sparkplug session has no event of its own: its state is polled.
+  setInterval(() => { if (state.wsOpen && state.gateway && state.gateway.sparkplug) refreshSparkplug().catch(() => {}); }, 5_000);
   // The charts scroll even when a node goes quiet, so silence is visible.
   setInterval(() => { if (state.selected !== null) state.dirty.values = true; }, 1000);
   loadAll();

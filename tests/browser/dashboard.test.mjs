@@ -11,6 +11,7 @@
 import { spawn } from 'node:child_process';
 import { createHash, randomBytes } from 'node:crypto';
 import fs from 'node:fs';
+import net from 'node:net';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -243,6 +244,7 @@ async function partDemo() {
   await page.waitForFunction(() => document.querySelector('#nodes-body tr[data-node="5"] [data-field=state]')
     ?.textContent === 'operational');
   check(true, 'node 5 is shown operational');
+  check(await page.isHidden('#spb-state'), 'no Sparkplug badge without Sparkplug');
   const bus = await page.getAttribute('#bus-state', 'data-state');
   check(bus === 'error-active', `bus state shown as error-active (got ${bus})`);
   // error-active is the CAN controller's normal state: it must look healthy,
@@ -511,6 +513,59 @@ async function partToken() {
   await stopGateway(g);
 }
 
+// ---------------------------------------------------------------- part 3: Sparkplug B session
+
+async function freePort() {
+  return new Promise((resolve, reject) => {
+    const srv = net.createServer();
+    srv.on('error', reject);
+    srv.listen(0, '127.0.0.1', () => { const { port } = srv.address(); srv.close(() => resolve(port)); });
+  });
+}
+
+// The Sparkplug edge node's state is shown next to the bus and the event
+// stream: online once born on a real broker, offline (an alarm: SCADA sees
+// the gateway dead) when the broker is gone.
+async function partSparkplug() {
+  const mosquitto = '/usr/sbin/mosquitto';
+  if (!fs.existsSync(mosquitto)) throw new Error(`${mosquitto} not found (./deploy/install-deps.sh installs it)`);
+  const port = await freePort();
+  const broker = spawn(mosquitto, ['-p', String(port)], { stdio: 'ignore' });
+  try {
+    const g = await startGateway('gateway-sparkplug', [
+      'gateway: { state-dir: "@STATE@" }',
+      `http: { listen: "127.0.0.1:0", web-root: "${WEB_ROOT}" }`,
+      `sparkplug: { group-id: Plant1, edge-node-id: line4, uri: "tcp://127.0.0.1:${port}" }`,
+      'networks:',
+      '  - simulated: true',
+      '',
+    ].join('\n'), []);
+    const base = await waitListening(g);
+    const ctx = await launch('sparkplug');
+    const page = await ctx.newPage();
+    watchConsole(page, 'sparkplug');
+    await page.goto(base + '/');
+    await page.waitForSelector('body[data-ws="open"]');
+    await page.waitForSelector('#spb-state[data-level="ok"]', { timeout: 15_000 });
+    const online = await page.evaluate(() => {
+      const p = document.querySelector('#spb-state');
+      return { text: p.textContent, title: p.title };
+    });
+    check(online.text === 'sparkplug: online' && /Plant1\/line4: online; bdSeq 0;/.test(online.title),
+      `the born edge node shows online with group, edge node id and bdSeq: "${online.text}" (${online.title})`);
+    await shot(page, 'dashboard-sparkplug.png', false);
+    broker.kill('SIGKILL');
+    await page.waitForSelector('#spb-state[data-level="bad"]', { timeout: 15_000 });
+    const offline = await page.textContent('#spb-state');
+    check(offline === 'sparkplug: offline', `with the broker gone it shows offline as an alarm ("${offline}")`);
+    await ctx.close();
+    browsers.splice(browsers.indexOf(ctx), 1);
+    await stopGateway(g);
+  } finally {
+    broker.kill('SIGKILL');
+  }
+}
+
 // ---------------------------------------------------------------- main
 
 try {
@@ -520,6 +575,7 @@ try {
   fs.mkdirSync(ARTIFACTS, { recursive: true });
   log(`chromium ${CHROMIUM}, web root ${WEB_ROOT}, artifacts ${ARTIFACTS}`);
   await partDemo();
+  await partSparkplug();
   if (process.env.DASHBOARD_TOKEN_TEST === '1') await partToken();
   else log('token part skipped (set DASHBOARD_TOKEN_TEST=1 to run it)');
   await finish(0);
