@@ -214,8 +214,15 @@ class LssMaster : public DeadlineSource {
   FrameSink sink_;
   std::unique_ptr<Job> current_;
   std::deque<std::unique_ptr<Job>> queue_;
+  std::unique_ptr<Job> retired_;  // finished inside its own call; freed at the next call from outside
   TimePoint deadline_ = TimePoint::max();
-  bool in_handler_ = false;
+  bool in_call_ = false;          // inside on_frame()/on_time(): a job may be on the stack
+  struct CallScope {
+    explicit CallScope(bool& flag) : flag_(flag), was_(flag) { flag_ = true; }
+    ~CallScope() { flag_ = was_; }
+    bool& flag_;
+    bool was_;
+  };
 };
 
 }  // namespace canopen::lss
