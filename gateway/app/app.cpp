@@ -40,6 +40,36 @@ std::string pdo_text(const canopen::PdoEvent& ev) {
   return s;
 }
 
+// lss.assign of one network (contract "LSS master", config): entry `i`, then
+// the next once it is answered, each through the request core (so it is
+// audited and holds the network's LSS master like any LSS request). A
+// device that does not answer is logged, never fatal.
+void assign_from_config(core::RequestCore& core, Logger& log, std::string label, std::uint32_t net,
+                        std::vector<LssAssignConfig> list, std::size_t i) {
+  if (i >= list.size()) return;
+  const LssAssignConfig e = list[i];
+  core::Request r;
+  r.caller.authenticated = true;
+  r.caller.role = Role::Admin;
+  r.caller.who = "lss.assign (configuration)";
+  r.caller.key = "configuration";
+  r.network = net;
+  r.command = core::LssConfigure{core::LssAddress{e.vendor_id, e.product_code, e.revision, e.serial}, e.node_id,
+                                 std::nullopt, e.store};
+  core.execute(std::move(r), [&core, &log, label, net, list = std::move(list), i, e](core::Result result) mutable {
+    const std::string what = label + ": lss.assign " +
+                             canopen::lss::to_string({e.vendor_id, e.product_code, e.revision, e.serial}) +
+                             " -> node-ID " + std::to_string(e.node_id);
+    if (const auto* p = std::get_if<core::Problem>(&result)) {
+      log.warn(what + ": not assigned: " + p->detail);
+    } else {
+      log.info(what + ": assigned" + (e.store ? " and stored" : ""));
+    }
+    log.flush();
+    assign_from_config(core, log, label, net, std::move(list), i + 1);
+  });
+}
+
 }  // namespace
 
 
@@ -371,6 +401,7 @@ void App::start() {
     n->local->start(n->now());  // boot-up (7.2.8.3.3), then heartbeats
     n->link.start_simulation();
   }
+  for (auto& n : nets_) assign_from_config(core_, log_, n->label, n->number, n->cfg.lss_assign, 0);
   std::string nets;
   for (const auto& n : nets_) nets += (nets.empty() ? "" : ", ") + n->label;
   log_.info("canopen-gateway started: " + nets + "; version " CANOPEN_GATEWAY_VERSION ", gateway id " +
