@@ -148,6 +148,8 @@ class Session : public std::enable_shared_from_this<Session> {
     caller_.key = "ascii:" + std::to_string(id);
   }
 
+  std::size_t buffered() const { return out_.size() + (writing_ ? wbuf_.size() : 0); }
+
   void start() {
     touch();
     arm_timer();
@@ -527,5 +529,11 @@ std::string Server::local_address() const {
 std::uint16_t Server::bound_port() const { return impl_->port; }
 
 std::size_t Server::clients() const { return impl_->sessions.size(); }
+
+std::size_t Server::buffered_output() const {
+  std::size_t n = 0;
+  for (const auto& s : impl_->sessions) n = std::max(n, s->buffered());
+  return n;
+}
 
 }  // namespace gateway::ascii

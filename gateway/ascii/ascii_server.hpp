@@ -95,6 +95,9 @@ class Server {
   std::string local_address() const;
   std::uint16_t bound_port() const;  // 0 for a unix socket
   std::size_t clients() const;
+  // The most answer bytes one connection holds now (waiting for its client
+  // to read them): at most about max_output plus one piece of an answer.
+  std::size_t buffered_output() const;
 
   struct Impl;  // internal (the connections refer to it)
 
