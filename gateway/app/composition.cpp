@@ -59,6 +59,8 @@ NetworkLink open_simulated(boost::asio::io_context& io, const NetworkConfig& cfg
       io, *link.memory_devices, so,
       [&log, label](std::string_view line) { log.debug(label + " simulator: " + std::string(line)); });
   for (const auto& node : cfg.nodes) link.simulator->add_node(node.id, demo_description(node.id));
+  // One more that waits unconfigured for LSS (CiA 305): the demo of commissioning.
+  link.simulator->add_unconfigured_node(demo_new_device_description);
   return link;
 }
 

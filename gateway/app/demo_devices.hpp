@@ -15,5 +15,9 @@ namespace gateway {
 std::vector<NodeConfig> demo_node_configs();
 // The description of a demo node. Throws std::out_of_range for another node.
 canopen::eds::DeviceDescription demo_description(std::uint8_t node);
+// The demo's new device: a CiA 401 I/O module that starts unconfigured
+// (node-ID FFh, LSS only; CiA 305) until a master gives it a node-ID; its
+// description at that node-ID. Not in demo_node_configs().
+canopen::eds::DeviceDescription demo_new_device_description(std::uint8_t node);
 
 }  // namespace gateway

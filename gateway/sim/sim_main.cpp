@@ -1,6 +1,6 @@
 // canopen-sim: simulated CANopen nodes on a SocketCAN interface.
 //
-//   canopen-sim --can IFACE --node N=EDSFILE [--node ...] [--heartbeat MS]
+//   canopen-sim --can IFACE --node N=EDSFILE [--node ff=EDSFILE] [--node ...] [--heartbeat MS]
 //               [--tpdo-period MS] [--emcy-period MS] [--sync-period MS] [--auto-start]
 //
 // Prints one line per important event on stdout ("ready", "node 5 boot-up",
@@ -43,7 +43,17 @@ interface is open).
 
   --can IFACE        SocketCAN interface (vcan0, can0, ...). Required.
   --node N=EDSFILE   a device with node-ID N (1..127) described by EDSFILE
-                     (EDS or DCF); repeatable, at least one.
+                     (EDS or DCF); repeatable, at least one. N = ff: the
+                     device starts unconfigured (CiA 305 LSS, node-ID FFh):
+                     no boot-up, no heartbeat, only LSS answers, until an
+                     LSS master gives it a node-ID and switches it back to
+                     waiting; then it boots with that node-ID ("lss ...:
+                     node-ID N", "node N boot-up"). Several may be ff.
+                     Every device is an LSS slave; its LSS address is its
+                     1018h, with serial number 53000000h + N (55000000h +
+                     k for the k-th unconfigured one) when the EDS gives 0.
+                     A node-ID set by LSS on a configured device takes
+                     effect at its next NMT reset communication.
   --heartbeat MS     every node's heartbeat period (1017h); 0: none.
                      Default: 1000.
   --tpdo-period MS   how often the mapped values change; 0: never.
@@ -72,6 +82,9 @@ unsigned long number(std::string_view what, std::string_view s, unsigned long ma
   return v;
 }
 
+// --node ff=...: a device that waits for LSS.
+constexpr unsigned long kUnconfigured = 0xFF;
+
 struct Args {
   bool help = false;
   std::string iface;
@@ -93,10 +106,11 @@ Args parse(const std::vector<std::string>& a) {
       const std::string& v = value();
       const auto eq = v.find('=');
       if (eq == std::string::npos || eq + 1 == v.size()) throw UsageError("--node: expected N=EDSFILE, got '" + v + "'");
-      const auto n = number("--node", std::string_view(v).substr(0, eq), 127);
-      if (n < 1) throw UsageError("--node: node-ID must be 1..127");
+      const std::string_view id_text = std::string_view(v).substr(0, eq);
+      const auto n = id_text == "ff" || id_text == "FF" ? kUnconfigured : number("--node", id_text, 127);
+      if (n < 1) throw UsageError("--node: node-ID must be 1..127 or ff");
       for (const auto& [id, f] : out.nodes)
-        if (id == n) throw UsageError("--node: node " + std::to_string(n) + " given twice");
+        if (id == n && n != kUnconfigured) throw UsageError("--node: node " + std::to_string(n) + " given twice");
       out.nodes.emplace_back(static_cast<std::uint8_t>(n), v.substr(eq + 1));
     } else if (opt == "--heartbeat") {
       out.options.heartbeat = std::chrono::milliseconds(number(opt, value(), 65535));
@@ -145,10 +159,9 @@ int main(int argc, char** argv) {
     return 0;
   }
   // EDS files first: a bad file is refused before touching the bus.
-  std::vector<std::pair<std::uint8_t, canopen::eds::DeviceDescription>> descriptions;
   try {
     for (const auto& [node, file] : args.nodes)
-      descriptions.emplace_back(node, canopen::eds::load_device_description(file, node));
+      (void)canopen::eds::load_device_description(file, node == kUnconfigured ? 1 : node);
   } catch (const canopen::eds::EdsError& e) {
     return fail(2, e.what());
   }
@@ -158,7 +171,11 @@ int main(int argc, char** argv) {
     auto monitor = canopen::socketcan::LinkMonitor::create(io);
     auto channel = canopen::socketcan::SocketCanChannel::open(io, args.iface, monitor);
     canopen::sim::Simulator sim(io, *channel, args.options, say);
-    for (auto& [node, desc] : descriptions) sim.add_node(node, std::move(desc));
+    // From the files (checked above), so a node-ID set by LSS reloads them at the new node-ID.
+    for (const auto& [node, file] : args.nodes) {
+      if (node == kUnconfigured) sim.add_unconfigured_node(std::filesystem::path(file));
+      else sim.add_node(node, std::filesystem::path(file));
+    }
     boost::asio::signal_set signals(io, SIGINT, SIGTERM);
     signals.async_wait([&](const boost::system::error_code&, int) {
       sim.stop();

@@ -123,15 +123,29 @@ void ensure_u32(od::ObjectDictionary& od, std::uint16_t index, const char* name,
 }  // namespace
 
 struct Simulator::Node {
-  std::uint8_t id = 0;
+  std::uint8_t id = lss::kUnconfiguredNodeId;  // the active node-ID; FFh while unconfigured
   std::uint16_t profile = 0;     // 1000h bits 0-15
   od::ObjectDictionary initial;  // the EDS values, restored by resets
   od::ObjectDictionary od;
-  std::unique_ptr<Device> device;
+  std::unique_ptr<Device> device;  // none while unconfigured
   bool sync_producer = false;
   std::uint16_t emcy_active = 0;
   std::size_t emcy_next = 0;
+  Describe describe;              // reloads the description for a new node-ID; may be empty
+  lss::Identity identity;         // the LSS address (1018h, serial made unique)
+  std::unique_ptr<lss::LssSlave> lss;
+  bool silenced = false;          // the device is being replaced: what it still sends is dropped
 };
+
+namespace {
+
+// The LSS address of a description: 1018h sub 1..4.
+lss::Identity identity_of(const od::ObjectDictionary& od) {
+  auto part = [&](std::uint8_t sub) { return static_cast<std::uint32_t>(od.get_unsigned(0x1018, sub).value_or(0)); };
+  return {part(1), part(2), part(3), part(4)};
+}
+
+}  // namespace
 
 Simulator::Simulator(boost::asio::io_context& io, can::Channel& channel, SimulatorOptions options,
                      LineHandler on_line)
@@ -151,27 +165,70 @@ void Simulator::say(const std::string& line) {
 
 void Simulator::add_node(std::uint8_t node, const std::filesystem::path& eds) {
   if (node < 1 || node > 127) throw std::invalid_argument("node-ID must be 1..127");
-  add_node(node, eds::load_device_description(eds, node));
+  add_node(node, Describe([eds](std::uint8_t id) { return eds::load_device_description(eds, id); }));
 }
 
 void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) {
   if (node < 1 || node > 127) throw std::invalid_argument("node-ID must be 1..127");
   if (nodes_.contains(node)) throw std::invalid_argument("node " + std::to_string(node) + " given twice");
+  auto n = make_node(node, std::move(description), nullptr);
+  nodes_.emplace(node, std::move(n));
+}
+
+void Simulator::add_node(std::uint8_t node, Describe describe) {
+  if (node < 1 || node > 127) throw std::invalid_argument("node-ID must be 1..127");
+  if (nodes_.contains(node)) throw std::invalid_argument("node " + std::to_string(node) + " given twice");
+  auto n = make_node(node, describe(node), describe);
+  nodes_.emplace(node, std::move(n));
+}
+
+void Simulator::add_unconfigured_node(const std::filesystem::path& eds) {
+  add_unconfigured_node(Describe([eds](std::uint8_t id) { return eds::load_device_description(eds, id); }));
+}
+
+void Simulator::add_unconfigured_node(Describe describe) {
+  // Any node-ID resolves the description: only its identity is needed now.
+  const eds::DeviceDescription probe = describe(1);
   auto n = std::make_unique<Node>();
-  Node* np = n.get();
-  n->id = node;
-  n->od = std::move(description.od);
-  n->profile = static_cast<std::uint16_t>(n->od.get_unsigned(0x1000, 0).value_or(0) & 0xFFFF);
-  // Objects the simulation writes must exist before the Device observes the dictionary.
-  if (n->od.find(0x1017, 0) == nullptr)
-    n->od.insert(od::make_var(0x1017, "Producer heartbeat time", DataType::Unsigned16, od::Access::ReadWrite,
-                              Value::of_unsigned(DataType::Unsigned16, 0)));
+  n->describe = std::move(describe);
+  n->identity = identity_of(probe.od);
+  if (n->identity.serial == 0) n->identity.serial = 0x55000000U + ++unconfigured_added_;
+  make_lss(*n, lss::kUnconfiguredNodeId);
+  waiting_.push_back(std::move(n));
+}
+
+std::unique_ptr<Simulator::Node> Simulator::make_node(std::uint8_t node, eds::DeviceDescription description,
+                                                      Describe describe) {
+  auto n = std::make_unique<Node>();
+  n->describe = std::move(describe);
+  n->identity = identity_of(description.od);
+  if (n->identity.serial == 0) n->identity.serial = 0x53000000U + node;
   n->sync_producer = opt_.sync_period.count() > 0 && nodes_.empty();
-  if (n->sync_producer) {
-    ensure_u32(n->od, 0x1005, "COB-ID SYNC message", 0x80);
-    ensure_u32(n->od, 0x1006, "Communication cycle period", 0);
+  build_device(*n, node, std::move(description));
+  make_lss(*n, node);
+  return n;
+}
+
+void Simulator::build_device(Node& n, std::uint8_t node, eds::DeviceDescription description) {
+  Node* np = &n;
+  n.device.reset();  // before its dictionary is replaced
+  n.id = node;
+  n.silenced = false;
+  n.emcy_active = 0;
+  n.od = std::move(description.od);
+  // The LSS address is the device's: 1018h sub 4 says the same.
+  if (n.od.find(0x1018, 4) != nullptr)
+    (void)n.od.set(0x1018, 4, Value::of_unsigned(DataType::Unsigned32, n.identity.serial));
+  n.profile = static_cast<std::uint16_t>(n.od.get_unsigned(0x1000, 0).value_or(0) & 0xFFFF);
+  // Objects the simulation writes must exist before the Device observes the dictionary.
+  if (n.od.find(0x1017, 0) == nullptr)
+    n.od.insert(od::make_var(0x1017, "Producer heartbeat time", DataType::Unsigned16, od::Access::ReadWrite,
+                             Value::of_unsigned(DataType::Unsigned16, 0)));
+  if (n.sync_producer) {
+    ensure_u32(n.od, 0x1005, "COB-ID SYNC message", 0x80);
+    ensure_u32(n.od, 0x1006, "Communication cycle period", 0);
   }
-  n->initial = n->od;
+  n.initial = n.od;
 
   DeviceConfig cfg;
   cfg.node_id = node;
@@ -182,7 +239,7 @@ void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) 
       if (opt_.auto_start) {
         // Not from inside the Device's callback: after it returns.
         boost::asio::post(io_, [this, np, alive = std::weak_ptr<bool>(alive_)] {
-          if (alive.expired() || !running_) return;
+          if (alive.expired() || !running_ || !np->device) return;
           np->device->command(NmtCommand::Start, SteadyClock::now());
         });
       }
@@ -203,19 +260,104 @@ void Simulator::add_node(std::uint8_t node, eds::DeviceDescription description) 
       (void)np->od.set(0x1005, 0, Value::of_unsigned(DataType::Unsigned32, cob | kCobIdBit30));
     }
     np->emcy_active = 0;
+    // CiA 305: a node-ID configured by LSS becomes active now. The device
+    // boots again at it (or goes silent for FFh); this one says no more.
+    if (np->lss) {
+      const std::uint8_t active = np->lss->reset_communication();
+      if (active != np->id) {
+        np->silenced = true;
+        boost::asio::post(io_, [this, np, active, alive = std::weak_ptr<bool>(alive_)] {
+          if (!alive.expired()) rehome(np, active);
+        });
+      }
+    }
   };
   cb.on_rpdo = [this, np](std::uint16_t number, std::span<const MappedValue> values) {
     std::string line = "node " + std::to_string(np->id) + " rpdo " + std::to_string(number);
     for (const auto& v : values) line += " " + v.name + "=" + format_value(v.value);
     say(line);
   };
-  n->device = std::make_unique<Device>(n->od, cfg,
-                                       [this, np](const can::Frame& f) {
-                                         channel_.send(f);
-                                         loopback(np, f);
-                                       },
-                                       std::move(cb));
-  nodes_.emplace(node, std::move(n));
+  n.device = std::make_unique<Device>(n.od, cfg,
+                                      [this, np](const can::Frame& f) {
+                                        if (np->silenced) return;
+                                        channel_.send(f);
+                                        loopback(np, f);
+                                      },
+                                      std::move(cb));
+}
+
+void Simulator::make_lss(Node& n, std::uint8_t node_id) {
+  Node* np = &n;
+  lss::SlaveCallbacks cb;
+  // The simulation keeps nothing across runs: storing always succeeds.
+  cb.store = [](std::uint8_t, std::optional<std::uint8_t>) { return std::uint8_t{0}; };
+  cb.activate_bit_timing = [this, np](std::uint16_t delay) {
+    say("lss " + lss::to_string(np->identity) + " activate bit timing (delay " + std::to_string(delay) +
+        " ms): ignored, the simulated bus has no bit rate");
+  };
+  cb.on_activate = [this, np](std::uint8_t id) {
+    boost::asio::post(io_, [this, np, id, alive = std::weak_ptr<bool>(alive_)] {
+      if (!alive.expired()) rehome(np, id);
+    });
+  };
+  n.lss = std::make_unique<lss::LssSlave>(n.identity, node_id, [this](const can::Frame& f) { channel_.send(f); },
+                                          std::move(cb));
+}
+
+void Simulator::rehome(Node* n, std::uint8_t new_id) {
+  if (!running_) return;
+  // Take the node out of where it is now.
+  std::unique_ptr<Node> owned;
+  if (n->id == lss::kUnconfiguredNodeId) {
+    auto it = std::find_if(waiting_.begin(), waiting_.end(), [n](const auto& w) { return w.get() == n; });
+    if (it == waiting_.end()) return;
+    owned = std::move(*it);
+    waiting_.erase(it);
+  } else {
+    auto it = nodes_.find(n->id);
+    if (it == nodes_.end() || it->second.get() != n) return;
+    owned = std::move(it->second);
+    nodes_.erase(it);
+    driver_.remove(n->device.get());
+    std::erase_if(local_, [n](const auto& e) { return e.first == n; });
+    n->device.reset();
+  }
+  const std::string who = "lss " + lss::to_string(n->identity);
+  auto park = [&](const std::string& why) {
+    say(who + ": " + why);
+    n->id = lss::kUnconfiguredNodeId;
+    make_lss(*n, lss::kUnconfiguredNodeId);  // a fresh slave: unconfigured, waiting
+    waiting_.push_back(std::move(owned));
+  };
+  if (new_id == lss::kUnconfiguredNodeId) return park("unconfigured, silent until LSS gives a node-ID");
+  if (nodes_.contains(new_id)) return park("node-ID " + std::to_string(new_id) + " is used by another simulated device");
+  try {
+    eds::DeviceDescription d;
+    if (n->describe) {
+      d = n->describe(new_id);
+    } else {
+      d.od = n->initial;  // no file to reload: the dictionary as it was
+    }
+    build_device(*n, new_id, std::move(d));
+  } catch (const std::exception& e) {
+    return park(std::string("cannot load its description for node-ID ") + std::to_string(new_id) + ": " + e.what());
+  }
+  say(who + ": node-ID " + std::to_string(new_id));
+  Node& placed = *owned;
+  nodes_.emplace(new_id, std::move(owned));
+  driver_.add(*placed.device);
+  placed.device->start(SteadyClock::now());
+}
+
+void Simulator::LssPort::on_frame(const can::Frame& f, TimePoint) {
+  if (!lss::is_master_frame(f)) return;
+  for (auto& [id, n] : sim->nodes_) n->lss->on_frame(f);
+  for (auto& n : sim->waiting_) n->lss->on_frame(f);
+}
+
+lss::LssSlave* Simulator::lss(std::uint8_t node) {
+  auto it = nodes_.find(node);
+  return it == nodes_.end() ? nullptr : it->second->lss.get();
 }
 
 void Simulator::restore(Node& n, std::uint16_t first, std::uint16_t last) {
@@ -229,6 +371,7 @@ void Simulator::start() {
   if (running_) return;
   running_ = true;
   started_ = SteadyClock::now();
+  driver_.add(lss_port_);
   for (auto& [id, n] : nodes_) driver_.add(*n->device);
   for (auto& [id, n] : nodes_) n->device->start(SteadyClock::now());
   arm_values();
@@ -240,6 +383,7 @@ void Simulator::stop() {
   running_ = false;
   value_timer_.cancel();
   emcy_timer_.cancel();
+  driver_.remove(&lss_port_);
   for (auto& [id, n] : nodes_) driver_.remove(n->device.get());
   local_.clear();
 }

@@ -16,7 +16,17 @@
 //   - an EMCY every emcy_period (raised, then reset at the next period), and
 //     raise_emcy() on command;
 //   - with sync_period set, the first node added produces SYNC (1005h bit
-//     30, 1006h), so synchronous TPDOs flow.
+//     30, 1006h), so synchronous TPDOs flow;
+//   - LSS slave (CiA 305, canopen/lss/slave.hpp) with the LSS address of
+//     its 1018h; an EDS serial number of 0 is replaced by one of the
+//     simulator's (53000000h + node-ID; 55000000h + n for the n-th
+//     unconfigured device) so no two simulated devices share an address.
+//     A new node-ID given by LSS becomes active at the device's next NMT
+//     reset communication: it then boots with it (FFh: it goes silent,
+//     unconfigured). add_unconfigured_node() adds a device that starts
+//     without a node-ID: no boot-up, no heartbeat, only LSS, until a master
+//     gives it one and switches it back to waiting; then it boots with it
+//     like any other node.
 // Nodes added to one Simulator hear each other's frames as on a real bus.
 //
 // Each important event is reported as one line ("node 5 boot-up",
@@ -39,10 +49,12 @@
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "canopen/can/channel.hpp"
 #include "canopen/device.hpp"
 #include "canopen/eds/eds.hpp"
+#include "canopen/lss/slave.hpp"
 #include "canopen/socketcan/service_driver.hpp"
 
 namespace canopen::sim {
@@ -58,6 +70,8 @@ struct SimulatorOptions {
 class Simulator {
  public:
   using LineHandler = std::function<void(std::string_view line)>;
+  // The description of a device at a node-ID ($NODEID resolved with it).
+  using Describe = std::function<eds::DeviceDescription(std::uint8_t node)>;
 
   Simulator(boost::asio::io_context& io, can::Channel& channel, SimulatorOptions options, LineHandler on_line = {});
   ~Simulator();
@@ -67,7 +81,15 @@ class Simulator {
   // Loads the EDS with $NODEID = node. Throws eds::EdsError for a bad file,
   // std::invalid_argument for a bad or duplicate node-ID. Before start().
   void add_node(std::uint8_t node, const std::filesystem::path& eds);
+  // A description without a Describe cannot be reloaded for another
+  // node-ID: after an LSS node-ID change the device keeps its dictionary
+  // (COB-IDs of PDOs/EMCY as at the old node-ID).
   void add_node(std::uint8_t node, eds::DeviceDescription description);
+  void add_node(std::uint8_t node, Describe describe);
+  // A device that starts unconfigured (node-ID FFh, see top). Throws like
+  // add_node(). Before start().
+  void add_unconfigured_node(const std::filesystem::path& eds);
+  void add_unconfigured_node(Describe describe);
 
   // Power-on of every node (boot-up) and the timers.
   void start();
@@ -83,10 +105,29 @@ class Simulator {
   // configuration (e.g. PDO mapping) differs from its EDS. False for an
   // unknown node.
   bool store(std::uint8_t node);
+  // Devices with a node-ID.
   std::size_t size() const { return nodes_.size(); }
+  // Devices waiting for a node-ID (LSS).
+  std::size_t unconfigured() const { return waiting_.size(); }
+  // The LSS slave of the device with this active node-ID; nullptr if none.
+  lss::LssSlave* lss(std::uint8_t node);
 
  private:
   struct Node;
+  // Feeds every device's LSS slave (one service on the driver for all).
+  struct LssPort {
+    Simulator* sim;
+    void on_frame(const can::Frame& f, TimePoint now);
+    void on_time(TimePoint) {}
+    TimePoint next_deadline() const { return TimePoint::max(); }
+  };
+  std::unique_ptr<Node> make_node(std::uint8_t node, eds::DeviceDescription description, Describe describe);
+  // (Re)builds the Device of `n` at node-ID `node` from `description`.
+  void build_device(Node& n, std::uint8_t node, eds::DeviceDescription description);
+  void make_lss(Node& n, std::uint8_t node_id);
+  // After an LSS node-ID change: the device at its new node-ID (booted), or
+  // unconfigured. Runs from the io_context, outside the driver's loops.
+  void rehome(Node* n, std::uint8_t new_id);
   void say(const std::string& line);
   void tick_values();
   void tick_emcy();
@@ -101,6 +142,9 @@ class Simulator {
   LineHandler on_line_;
   socketcan::ServiceDriver driver_;
   std::map<std::uint8_t, std::unique_ptr<Node>> nodes_;
+  std::vector<std::unique_ptr<Node>> waiting_;  // unconfigured: LSS only
+  std::uint32_t unconfigured_added_ = 0;
+  LssPort lss_port_{this};
   boost::asio::steady_timer value_timer_;
   boost::asio::steady_timer emcy_timer_;
   TimePoint started_{};

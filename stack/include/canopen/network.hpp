@@ -9,7 +9,7 @@
 // SDO client, boot-up configuration of nodes (CiA 302 spirit), PDO receiver
 // (the nodes' TPDOs), PDO producer (process data to the nodes' RPDOs, with
 // synchronous types driven by the SYNCs this network sees), EMCY, SYNC and
-// TIME consumers.
+// TIME consumers, LSS master (CiA 305).
 //
 // PDOs follow the devices (CiA 301 7.2.2, 7.5.2.35-7.5.2.39): every
 // successful SDO download by this network's SDO client to 1400h-1BFFh of a
@@ -43,6 +43,7 @@
 #include "canopen/sync/sync.hpp"
 #include "canopen/time/time.hpp"
 #include "canopen/events.hpp"
+#include "canopen/lss/master.hpp"
 #include "canopen/master/boot_configurator.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/object_dictionary.hpp"
@@ -109,6 +110,10 @@ class Network : public DeadlineSource {
   pdo::PdoReceiver& pdo() { return pdo_; }
   // Process data to the nodes' RPDOs.
   pdo::PdoTransmitter& rpdo() { return rpdo_; }
+  // The LSS master of this network (CiA 305, lss/master.hpp): it hears the
+  // slaves' answers (7E4h) through on_frame(), its timeouts run in
+  // on_time(), its submits report the deadline like the other services.
+  lss::LssMaster& lss() { return lss_; }
   // The seq of the latest event (0: none yet, when the sequence started at 1).
   std::uint64_t last_seq() const { return seq_; }
   // The next event gets `next` (>= 1) and the sequence goes on from there:
@@ -133,6 +138,7 @@ class Network : public DeadlineSource {
   sdo::SdoClient sdo_;
   pdo::PdoReceiver pdo_;
   pdo::PdoTransmitter rpdo_;
+  lss::LssMaster lss_;
   std::unique_ptr<master::BootConfigurator> boot_;
   TimePoint now_{};  // the latest time given to on_frame()/on_time()
   emcy::EmcyConsumer emcy_;

@@ -26,6 +26,7 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
       sdo_(sdo_config, sink),
       pdo_(sink, [this](PdoEvent ev) { emit(std::move(ev), frame_time_); }),
       rpdo_(sink),
+      lss_(lss::MasterConfig{}, sink),
       emcy_(emcy::EmcyConsumerConfig::from_dictionary(own), [this](const EmcyEvent& ev) { emit(ev, frame_time_); }),
       sync_(own,
             [this](const SyncEvent& ev) {
@@ -44,6 +45,7 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
   nmt_.on_deadline_change(forward);
   sdo_.on_deadline_change(forward);
   rpdo_.on_deadline_change(forward);
+  lss_.on_deadline_change(forward);
   configure_heartbeat_consumers();
 }
 
@@ -187,6 +189,7 @@ bool Network::on_frame(const can::Frame& frame, TimePoint now) {
   used = time_.on_frame(frame, now) || used;
   used = pdo_.on_frame(frame, now) || used;
   used = rpdo_.on_frame(frame, now) || used;  // RTRs for RPDO data the gateway produces
+  used = lss_.on_frame(frame, now) || used;   // LSS slaves' answers (7E4h)
   return used;
 }
 
@@ -195,10 +198,11 @@ void Network::on_time(TimePoint now) {
   if (nmt_.next_deadline() <= now) nmt_.on_time(now);
   if (sdo_.next_deadline() <= now) sdo_.on_time(now);
   if (rpdo_.next_deadline() <= now) rpdo_.on_time(now);
+  if (lss_.next_deadline() <= now) lss_.on_time(now);
 }
 
 TimePoint Network::next_deadline() const {
-  return std::min({nmt_.next_deadline(), sdo_.next_deadline(), rpdo_.next_deadline()});
+  return std::min({nmt_.next_deadline(), sdo_.next_deadline(), rpdo_.next_deadline(), lss_.next_deadline()});
 }
 
 void Network::report(const can::BusEvent& ev) { emit(ev, wall_()); }

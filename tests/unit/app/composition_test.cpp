@@ -37,6 +37,7 @@ TEST(Composition, ADemoNetworkIsOneUnitWhoseChannelIsTheSimulatedBus) {
   EXPECT_EQ(u.channel, u.link.memory_gateway.get()) << "the unit uses the gateway's end of the bus";
   ASSERT_NE(u.link.simulator, nullptr);
   EXPECT_EQ(u.link.simulator->size(), demo_node_configs().size()) << "the demo devices on the other end";
+  EXPECT_EQ(u.link.simulator->unconfigured(), 1U) << "and one that waits for LSS (issue 16, CiA 305)";
   EXPECT_EQ(u.descriptions.size(), demo_node_configs().size());
   EXPECT_EQ(u.cfg.nodes.size(), demo_node_configs().size()) << "the node list is the demo's";
 }

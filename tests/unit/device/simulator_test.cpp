@@ -136,5 +136,112 @@ TEST(Simulator, ResetNode_RebootsWithBootUpAndRestoresHeartbeat) {
   EXPECT_EQ(b.sim.device(kDrive)->dictionary().get_unsigned(0x1017, 0), 40U);
 }
 
+// Runs the io_context in slices until `done` or 10 s passed (bounded: the
+// simulator never stops by itself).
+template <typename Pred>
+bool run_until(boost::asio::io_context& io, Pred done) {
+  for (int i = 0; i < 1000 && !done(); ++i) io.run_for(10ms);
+  return done();
+}
+
+std::vector<std::uint8_t> booted(const Bench& b) {
+  std::vector<std::uint8_t> out;
+  for (const auto* s : b.of<NodeStateEvent>())
+    if (s->cause == NodeStateEvent::Cause::BootUp) out.push_back(s->node);
+  return out;
+}
+
+// Issue 16 item 4, CiA 305: a device that starts unconfigured says nothing
+// but LSS; assign-all gives it a node-ID, it boots with it and is a node
+// like any other (facts C.4 item 1).
+TEST(Simulator, UnconfiguredDeviceIsSilentUntilLssGivesItANodeIdThenBoots_Cia305) {
+  SimulatorOptions opt;
+  opt.heartbeat = 50ms;
+  Bench b(opt);
+  b.sim.add_node(kDrive, source_path("deploy/eds/cia402-drive.eds"));
+  b.sim.add_unconfigured_node(source_path("deploy/eds/cia401-io-module.eds"));
+  EXPECT_EQ(b.sim.size(), 1U);
+  EXPECT_EQ(b.sim.unconfigured(), 1U);
+  // Short step windows: the in-process bus answers within the io_context's turn.
+  b.net.lss().set_config({.timeout = 200ms, .scan_step_timeout = 5ms, .queue_limit = 16, .fastscan_restarts = 2});
+  b.sim.start();
+  b.io.run_for(200ms);
+  EXPECT_EQ(booted(b), std::vector<std::uint8_t>{kDrive}) << "no boot-up from the unconfigured device";
+
+  std::optional<Result<bool>> nonconf;
+  ASSERT_FALSE(b.net.lss().identify_non_configured([&](Result<bool> r) { nonconf.emplace(std::move(r)); },
+                                                   SteadyClock::now()));
+  ASSERT_TRUE(run_until(b.io, [&] { return nonconf.has_value(); }));
+  EXPECT_TRUE(nonconf->value());
+
+  std::optional<lss::AssignAllResult> got;
+  lss::AssignAllRequest req;
+  req.first_node_id = 20;
+  ASSERT_FALSE(b.net.lss().assign_all(req, [&](const lss::AssignAllResult& r) { got = r; }, SteadyClock::now()));
+  ASSERT_TRUE(run_until(b.io, [&] { return got.has_value() && b.sim.device(20) != nullptr; }));
+  ASSERT_FALSE(got->error) << got->error.message();
+  ASSERT_EQ(got->assigned.size(), 1U);
+  EXPECT_EQ(got->assigned[0].node_id, 20);
+  // The IO module's 1018h, with the simulator's serial for the first unconfigured device.
+  EXPECT_EQ(got->assigned[0].identity, (lss::Identity{0x5A1, 0x8822, 0x00010003, 0x55000001}));
+  ASSERT_TRUE(run_until(b.io, [&] { return booted(b).size() == 2; }));
+  EXPECT_EQ(booted(b), (std::vector<std::uint8_t>{kDrive, 20}));
+  EXPECT_EQ(b.sim.unconfigured(), 0U);
+  EXPECT_EQ(b.sim.size(), 2U);
+  // Its 1018h sub 4 is its LSS serial; its SDO server answers at its new node-ID.
+  std::optional<sdo::TransferResult> serial;
+  sdo::Request rq;
+  rq.node = 20;
+  rq.index = 0x1018;
+  rq.sub = 4;
+  rq.on_done = [&](sdo::TransferResult&& r) { serial.emplace(std::move(r)); };
+  ASSERT_TRUE(b.net.sdo().upload(std::move(rq), SteadyClock::now()).ok());
+  ASSERT_TRUE(run_until(b.io, [&] { return serial.has_value(); }));
+  ASSERT_TRUE(serial->ok());
+  EXPECT_EQ(serial->data, (Bytes{0x01, 0x00, 0x00, 0x55}));
+  b.sim.stop();
+}
+
+// CiA 305 / facts D.8: a configured device takes a new node-ID only at its
+// next NMT reset communication, and then boots with it.
+TEST(Simulator, ConfiguredDeviceTakesLssNodeIdAtResetCommunication_Cia305) {
+  SimulatorOptions opt;
+  opt.heartbeat = 50ms;
+  Bench b(opt);
+  b.sim.add_node(kDrive, source_path("deploy/eds/cia402-drive.eds"));
+  b.sim.start();
+  b.io.run_for(100ms);
+  ASSERT_NE(b.sim.lss(kDrive), nullptr);
+  const lss::Identity id = b.sim.lss(kDrive)->identity();
+  EXPECT_EQ(id.serial, 0x53000000U + kDrive) << "EDS serial 0: the simulator's, unique per node";
+  int step = 0;
+  std::error_code failed;
+  auto next = [&](auto r) {
+    if (!r.ok()) failed = r.code();
+    ++step;
+  };
+  auto& lss = b.net.lss();
+  ASSERT_FALSE(lss.switch_state_selective(id, [&](Result<lss::Ack> r) { next(r); }, SteadyClock::now()));
+  std::optional<std::uint8_t> inquired;
+  ASSERT_FALSE(lss.inquire_node_id(
+      [&](Result<std::uint8_t> r) {
+        if (r.ok()) inquired = r.value();
+        next(r);
+      },
+      SteadyClock::now()));
+  ASSERT_FALSE(lss.configure_node_id(7, [&](Result<lss::Ack> r) { next(r); }, SteadyClock::now()));
+  ASSERT_FALSE(lss.switch_state_global(lss::Mode::Waiting, [&](Result<lss::Ack> r) { next(r); }, SteadyClock::now()));
+  ASSERT_TRUE(run_until(b.io, [&] { return step == 4; }));
+  ASSERT_FALSE(failed) << failed.message();
+  EXPECT_EQ(inquired, kDrive);
+  b.io.run_for(100ms);
+  EXPECT_NE(b.sim.device(kDrive), nullptr) << "still node 5 until reset communication";
+  b.net.nmt().send_command(NmtCommand::ResetCommunication, kDrive);
+  ASSERT_TRUE(run_until(b.io, [&] { return b.sim.device(7) != nullptr && booted(b).size() == 2; }));
+  EXPECT_EQ(booted(b), (std::vector<std::uint8_t>{kDrive, 7})) << "no second boot-up as node 5";
+  EXPECT_EQ(b.sim.device(kDrive), nullptr);
+  b.sim.stop();
+}
+
 }  // namespace
 }  // namespace canopen::sim

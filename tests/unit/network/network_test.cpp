@@ -11,6 +11,7 @@
 #include "canopen/can/memory_bus.hpp"
 #include "canopen/eds/eds.hpp"
 #include "canopen/emcy/emcy.hpp"
+#include "canopen/lss/slave.hpp"
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/pdo/transmitter.hpp"
@@ -212,6 +213,34 @@ TEST(Network, SynchronousRpdoDataWaitsForTheSync_7_2_2_2) {
   ASSERT_EQ(rig.device_rx.size(), 1U);
   EXPECT_EQ(rig.device_rx[0].id, 0x200U + kDevice);
   EXPECT_EQ(std::vector<std::uint8_t>(rig.device_rx[0].payload().begin(), rig.device_rx[0].payload().end()), (std::vector<std::uint8_t>{0x06, 0x00}));
+}
+
+// The network's LSS master (CiA 305, issue 16): the slaves' answers (7E4h)
+// reach it through Network::on_frame, its step windows run in on_time, and
+// a submit reports the network's new deadline.
+TEST(Network, LssMasterHearsTheSlavesAndRunsItsWindows_Cia305) {
+  Rig rig;
+  const lss::Identity identity{0x00000123, 0x00004567, 1, 0xBEEF};
+  lss::LssSlave lss_slave{identity, lss::kUnconfiguredNodeId, [&rig](const can::Frame& f) { rig.dev_ep->send(f); }};
+  rig.dev_ep->on_frames([&](std::span<const can::Frame> fs) {
+    for (const auto& f : fs) lss_slave.on_frame(f);
+  });
+  std::vector<TimePoint> reported;
+  rig.net.on_deadline_change([&](TimePoint t) { reported.push_back(t); });
+  std::optional<lss::FastscanResult> got;
+  ASSERT_FALSE(rig.net.lss().fastscan({}, [&](const lss::FastscanResult& r) { got = r; }, rig.clock.now()));
+  ASSERT_FALSE(reported.empty());
+  EXPECT_EQ(reported.back(), rig.clock.now() + 100ms);
+  const std::size_t events_before = rig.events.size();
+  rig.bus.deliver();
+  for (int i = 0; i < 200 && !got; ++i) rig.step(100ms);
+  ASSERT_TRUE(got);
+  ASSERT_FALSE(got->error) << got->error.message();
+  EXPECT_EQ(got->identity, identity);
+  EXPECT_EQ(got->exchanges, 133U);
+  EXPECT_EQ(lss_slave.mode(), lss::Mode::Configuration);
+  for (std::size_t i = events_before; i < rig.events.size(); ++i)
+    EXPECT_FALSE(std::holds_alternative<NodeStateEvent>(rig.events[i].body)) << "LSS frames are no node's heartbeat";
 }
 
 }  // namespace
