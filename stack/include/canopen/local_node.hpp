@@ -16,7 +16,8 @@
 //     node's frames - SYNC (1005h) and TIME (1012h) drive the master side's
 //     synchronous RPDOs and consumers, its EMCY (1014h) is published like
 //     any node's -, hears() for the master's - NMT commands to all nodes or
-//     to the own node-ID (7.2.8.3.1).
+//     to the own node-ID (7.2.8.3.1). Not the LSS master's requests (7E5h):
+//     the own node is no LSS slave, its node-ID is the configuration's.
 //
 // The caller MUST keep the dictionary alive as long as the LocalNode, feed
 // it like a Device (on_frame/on_time/next_deadline; it reports other
