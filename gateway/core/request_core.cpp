@@ -429,7 +429,7 @@ std::string_view step_name(const LssStep& step) {
   return std::visit(Visitor{}, step);
 }
 
-// A slave's error code as CiA 305 defines it for the service (7.3.3-7.3.5).
+// A slave's error code with the meaning CiA 305 gives it for the service (facts C.1).
 Problem lss_refusal(const LssStep& step, const LssOutcome& o) {
   Problem p = problem(422, "");
   p.title = "LSS error";

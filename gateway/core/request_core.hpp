@@ -14,8 +14,12 @@
 //   - SDO semantics: the type (as asked, else the EDS/DCF's, else DOMAIN),
 //     values typed and checked against the EDS/DCF limits before anything
 //     goes on the bus, the gateway's own node answered from its dictionary;
-//   - audit lines for every write, NMT command, SYNC and PDO read, and for
-//     every refusal by role;
+//   - audit lines for every write, NMT command, SYNC, PDO read and LSS
+//     operation, and for every refusal by role;
+//   - LSS (CiA 305): one operation per network at a time (409 otherwise),
+//     multi-step ones (configure, assign-all, fastscan) as a sequence of
+//     single services that ends with all slaves back in waiting state, also
+//     after a failure; the last scan's finds kept per network;
 //   - counters and the SDO latency histogram (/metrics).
 // The core reaches the CAN side only through Networks, which the process
 // (App) implements over its networks and tests fake.
