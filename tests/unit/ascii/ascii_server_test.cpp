@@ -75,6 +75,12 @@ class Client {
     }
   }
   void shutdown_write() { ::shutdown(fd_, SHUT_WR); }
+  // Keeps what the kernel takes from this client small, so a server that
+  // stops reading shows as a send that stops (not hidden by big buffers).
+  void small_send_buffer() {
+    const int size = 64 * 1024;
+    ::setsockopt(fd_, SOL_SOCKET, SO_SNDBUF, &size, sizeof size);
+  }
   // Takes what arrived; false once the server closed the connection.
   bool poll() {
     char buf[65536];
@@ -326,6 +332,7 @@ TEST(AsciiServer, AClientThatDoesNotReadIsNotBufferedForAndDoesNotBlockOthers) {
   constexpr std::size_t kMaxOutput = 8 * 1024;
   Rig rig([&](ServerConfig& sc) { sc.max_output = kMaxOutput; });
   auto stalled = rig.connect();
+  stalled->small_send_buffer();
   auto other = rig.connect();
   // Each help answer is over 1 KiB; 600000 of them are far more than any
   // socket buffer takes, and so are the 8 MB of commands.
