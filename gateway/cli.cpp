@@ -52,7 +52,8 @@ std::string usage_text() {
   return "usage: canopen-gateway [--config FILE] [--can IFACE]... [--node-id N]\n"
          "                       [--eds NODE=FILE]... [--mqtt URI]\n"
          "                       [--mqtt-format json|protobuf] [--http ADDR:PORT]\n"
-         "                       [--gateway-id ID] [--sparkplug GROUP_ID] [--demo]\n"
+         "                       [--gateway-id ID] [--sparkplug GROUP_ID]\n"
+         "                       [--ascii ADDR:PORT|unix:PATH] [--demo]\n"
          "                       [--log-level trace|debug|info|warn|error]\n"
          "       canopen-gateway --help | --version\n";
 }
@@ -96,6 +97,12 @@ is needed: --can, networks: in the --config file, or --demo.
                      sparkplug.edge-node-id, else the gateway id; the broker
                      sparkplug.uri, else mqtt's (--mqtt). Default:
                      sparkplug.group-id in the file, else off.
+  --ascii ADDR       also serve the CiA 309-3 ASCII interface (cocomm, nc):
+                     ADDR:PORT (an IP address; port 0: any free one) or
+                     unix:PATH (mode 0660). Off loopback the file needs
+                     ascii.allow-remote: true. Clients act with ascii.role
+                     (default operator). Default: ascii.listen in the file,
+                     else off.
   --demo             add a simulated network with a CiA 402 drive (node 5)
                      and two CiA 401 I/O modules (nodes 10, 11): no CAN
                      hardware or broker needed. On a loopback listener
@@ -206,6 +213,14 @@ CliOptions parse_cli(const std::vector<std::string>& args) {
       if (!valid_topic_level(v))
         throw UsageError("--sparkplug: '" + v + "' cannot be a Sparkplug group id (no '/', '+', '#', spaces)");
       o.sparkplug_group = v;
+    } else if (flag == "--ascii") {
+      const std::string v = take_value();
+      std::string host;
+      unsigned short port = 0;
+      const bool unix_path = v.rfind("unix:", 0) == 0 && v.size() > 5;
+      if (!unix_path && !split_host_port(v, host, port))
+        throw UsageError("--ascii: '" + v + "' is not ADDR:PORT or unix:PATH");
+      o.ascii = v;
     } else if (flag == "--demo") {
       no_value();
       o.demo = true;

@@ -30,6 +30,7 @@ struct CliOptions {
   std::optional<std::string> http;           // ADDR:PORT, checked
   std::optional<std::string> gateway_id;     // MQTT topic level, default the host name
   std::optional<std::string> sparkplug_group;  // --sparkplug GROUP_ID: the Sparkplug B edge node on
+  std::optional<std::string> ascii;          // --ascii ADDR:PORT or unix:PATH: the CiA 309-3 server on
   bool demo = false;                         // add a simulated network
   std::optional<LogLevel> log_level;
   bool help = false;

@@ -15,6 +15,8 @@
 #include <boost/asio/signal_set.hpp>
 
 #include "app.hpp"
+#include "ascii/ascii_listen.hpp"
+#include "ascii/ascii_server.hpp"
 #include "composition.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "cli.hpp"
@@ -109,6 +111,17 @@ void log_listeners(gateway::Logger& log, const gateway::Config& config, unsigned
   log.info("metrics: " + base + "/metrics" + (token ? " (needs a bearer token)" : ""));
 }
 
+// The ASCII server's settings from the configuration (ascii: / --ascii).
+gateway::ascii::ServerConfig ascii_settings(const gateway::Config& config) {
+  gateway::ascii::ServerConfig a;
+  a.listen = config.ascii.listen;
+  a.role = config.ascii.role;
+  a.idle_timeout = config.ascii.idle_timeout;
+  a.max_clients = config.ascii.max_clients;
+  a.networks = static_cast<std::uint32_t>(config.networks.size());
+  return a;
+}
+
 int run(const gateway::CliOptions& opts) {
   gateway::Config config;
   try {
@@ -163,17 +176,38 @@ int run(const gateway::CliOptions& opts) {
   }
   log_listeners(log, config, http->bound_port());
 
+  // The CiA 309-3 ASCII interface, after HTTP: the same request core.
+  std::unique_ptr<gateway::ascii::Server> ascii;
+  if (config.ascii.enabled) {
+    ascii = std::make_unique<gateway::ascii::Server>(io, ascii_settings(app->config()), app->requests(), &log);
+    try {
+      ascii->start();
+    } catch (const std::system_error& e) {
+      print_error(config.ascii.listen_origin + ": " + listen_failure(e));
+      return kExitConfig;
+    }
+    const std::string where = ascii->local_address();
+    log.info("CiA 309-3 ASCII on " + where + " (" +
+             (where.rfind("unix:", 0) == 0 ? std::string("unix socket, mode 0660")
+              : config.ascii.allow_remote && !gateway::ascii::parse_listen_address(where)->local()
+                  ? std::string("reachable from other machines: no authentication")
+                  : std::string("this machine only")) +
+             "; clients act as " + std::string(gateway::to_string(config.ascii.role)) + ")");
+  }
+
   app->start();
 
   boost::asio::signal_set signals(io, SIGINT, SIGTERM);
   signals.async_wait([&](const boost::system::error_code& ec, int sig) {
     if (ec) return;
     log.info(std::string("received ") + (sig == SIGINT ? "SIGINT" : "SIGTERM") + ", shutting down");
+    if (ascii) ascii->stop();
     http->stop();
     app->stop();
     io.stop();
   });
   io.run();
+  ascii.reset();
   app.reset();
   http.reset();
   log.info("stopped");

@@ -1,5 +1,6 @@
 #include "config.hpp"
 
+#include "ascii/ascii_listen.hpp"
 #include "canopen/eds/eds.hpp"
 #include "mqtt/topic_filter.hpp"
 #include "request_codec.hpp"      // parse_index_text
@@ -377,6 +378,22 @@ void parse_sparkplug(const At& a, SparkplugConfig& sp, const std::string& dir) {
 }
 
 
+void parse_ascii(const At& a, AsciiConfig& ac) {
+  a.expect_map({"listen", "allow-remote", "role", "idle-timeout-s", "max-clients"});
+  ac.enabled = true;
+  ac.listen_origin = a.where() + " (ascii.listen not set, default " + ac.listen + ")";
+  if (auto v = a.get("listen")) {
+    ac.listen = v->str();
+    if (!ascii::parse_listen_address(ac.listen))
+      v->fail("'" + ac.listen + "' is not ADDR:PORT (an IP address) or unix:/path");
+    ac.listen_origin = v->where() + " " + ac.listen;
+  }
+  if (auto v = a.get("allow-remote")) ac.allow_remote = v->boolean();
+  if (auto v = a.get("role")) ac.role = parse_role(*v);
+  if (auto v = a.get("idle-timeout-s")) ac.idle_timeout = std::chrono::seconds(v->integer(0, 86400));
+  if (auto v = a.get("max-clients")) ac.max_clients = v->integer(1, 1024);
+}
+
 void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
   a.expect_map({"listen", "tls", "host-names", "allowed-origins", "tokens", "auth", "plain-http", "rate-limit",
                 "web-root", "max-connections", "max-connections-per-address"});
@@ -473,7 +490,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   const std::string dir = file.empty() ? std::string() : fs::path(file).parent_path().string();
   At top(root, "", file);
   if (top.is_null()) return c;
-  top.expect_map({"gateway", "networks", "mqtt", "http", "sparkplug"});
+  top.expect_map({"gateway", "networks", "mqtt", "http", "sparkplug", "ascii"});
   std::uint8_t default_node_id = 127;
   if (auto g = top.get("gateway")) {
     g->expect_map({"id", "node-id", "log-level", "state-dir"});
@@ -539,6 +556,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   }
   if (auto h = top.get("http")) parse_http(*h, c.http, dir);
   if (auto sp = top.get("sparkplug")) parse_sparkplug(*sp, c.sparkplug, dir);
+  if (auto as = top.get("ascii")) parse_ascii(*as, c.ascii);
   return c;
 }
 
@@ -664,6 +682,23 @@ Config merge(Config c, const CliOptions& cli) {
     c.http.listen_origin = "--http " + *cli.http;
   }
   if (c.http.listen_origin.empty()) c.http.listen_origin = "http.listen not set, default 127.0.0.1:8080";
+  if (cli.ascii) {
+    c.ascii.enabled = true;
+    c.ascii.listen = *cli.ascii;
+    c.ascii.listen_origin = "--ascii " + *cli.ascii;
+  }
+  if (c.ascii.enabled) {
+    const auto a = ascii::parse_listen_address(c.ascii.listen);
+    if (!a)
+      throw ConfigError(c.ascii.listen_origin + ": '" + c.ascii.listen +
+                        "' is not ADDR:PORT (an IP address) or unix:/path");
+    // Anyone who reaches the socket acts with ascii.role: off this machine
+    // only when the file says so.
+    if (!a->local() && !c.ascii.allow_remote)
+      throw ConfigError(c.ascii.listen_origin +
+                        ": not a loopback address or unix socket, and the ASCII interface has no authentication of "
+                        "its own; set ascii.allow-remote: true to accept that (and limit who reaches the port)");
+  }
   // The server binds an address, it does not resolve names; "localhost" is
   // the one name everybody means the same by.
   if (c.http.address == "localhost") c.http.address = "127.0.0.1";

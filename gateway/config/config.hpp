@@ -175,6 +175,20 @@ struct HttpConfig : http::HttpConfig {
   Role anonymous_role() const { return !auth || tokens.empty() ? Role::Admin : Role::None; }
 };
 
+// The CiA 309-3 ASCII server (contract "CiA 309-3 ASCII interface",
+// ascii/ascii_server.hpp). The socket itself has no authentication, so it
+// listens on loopback or a unix socket unless allow_remote says otherwise.
+struct AsciiConfig {
+  bool enabled = false;  // --ascii ADDR, or an `ascii:` section
+  std::string listen = "127.0.0.1:60000";  // or "unix:/path" (cocomm's defaults: port 60000)
+  // "--ascii 0.0.0.0:60000", "gw.yaml:40: ascii.listen 0.0.0.0:60000", for messages (merge()).
+  std::string listen_origin;
+  bool allow_remote = false;
+  Role role = Role::Operator;  // what every ASCII client may do
+  std::chrono::seconds idle_timeout{300};  // 0 = never closed for idleness
+  std::size_t max_clients = 16;
+};
+
 struct Config {
   std::string source;      // the file it came from ("" = command line only)
   std::string gateway_id;  // default: host name
@@ -191,6 +205,7 @@ struct Config {
   MqttConfig mqtt;
   HttpConfig http;
   SparkplugConfig sparkplug;
+  AsciiConfig ascii;
 };
 
 // Parses YAML text; `file` is used in error messages only. Relative file

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <boost/json/value.hpp>
+#include <chrono>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -53,6 +54,12 @@ struct SdoRead {
   std::uint16_t index = 0;
   std::uint8_t sub = 0;
   std::optional<canopen::DataType> type;
+  // How the transfer runs (CiA 309-3 `set sdo_timeout` / `set sdo_block`):
+  // nullopt = the SDO client's default for the node.
+  std::optional<std::chrono::milliseconds> timeout = std::nullopt;
+  // true: block transfer; false: expedited/segmented only; nullopt: the
+  // client decides (block for large transfers where the node allows it).
+  std::optional<bool> block = std::nullopt;
 };
 
 // SDO download. The value as sent (JSON, or a protobuf Value as JSON), typed
@@ -64,6 +71,12 @@ struct SdoWrite {
   std::uint8_t sub = 0;
   std::optional<canopen::DataType> type;
   boost::json::value value;
+  // How the transfer runs (CiA 309-3 `set sdo_timeout` / `set sdo_block`):
+  // nullopt = the SDO client's default for the node.
+  std::optional<std::chrono::milliseconds> timeout = std::nullopt;
+  // true: block transfer; false: expedited/segmented only; nullopt: the
+  // client decides (block for large transfers where the node allows it).
+  std::optional<bool> block = std::nullopt;
 };
 
 // NMT command to `node` (0 = all nodes).

@@ -205,6 +205,8 @@ void RequestCore::sdo_read(Context& c, const SdoRead& cmd) {
   // costs devices without block transfer a refusal. Strings and domains
   // stay unknown.
   r.expected_size = canopen::fixed_size(type);
+  r.timeout = cmd.timeout;
+  if (cmd.block) r.mode = *cmd.block ? canopen::sdo::Mode::Block : canopen::sdo::Mode::Segmented;
   if (auto full = take_sdo_place(c, cmd.node)) return c.done(std::move(*full));
   ++counters_.sdo_requests;
   r.on_done = [this, type, done = c.done, net = c.network, node = cmd.node, key = c.caller.key,
@@ -263,6 +265,11 @@ void RequestCore::sdo_write(Context& c, const SdoWrite& cmd) {
   r.node = cmd.node;
   r.index = cmd.index;
   r.sub = cmd.sub;
+  r.timeout = cmd.timeout;
+  const auto size = canopen::encode(written).size();
+  if (cmd.block)
+    r.mode = *cmd.block ? canopen::sdo::Mode::Block
+                        : (size >= 1 && size <= 4 ? canopen::sdo::Mode::Expedited : canopen::sdo::Mode::Segmented);
   r.on_done = [this, done = c.done, written, line, net = c.network, node = cmd.node, key = c.caller.key,
                t0 = net_.now()](canopen::sdo::TransferResult&& res) {
     place_freed(net, node, key);

@@ -198,7 +198,7 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
               HasSubstr("not a hex SHA-256"));
   EXPECT_THAT(config_error("networks: [1, 2\n"), HasSubstr("gw.yaml:2: not valid YAML"));
   EXPECT_THAT(config_error("networks: can0\n"), HasSubstr("networks: expected a list"));
-  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http, sparkplug)");
+  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http, sparkplug, ascii)");
   EXPECT_THAT(config_error("- a\n"), HasSubstr("(top level): expected a mapping of keys"));
 }
 
@@ -603,6 +603,58 @@ TEST(Config, ListenErrorsBlameWhereTheAddressCameFrom) {
   flag.http = "127.0.0.1:9001";
   EXPECT_EQ(merge(parse_config("http: {listen: 127.0.0.1:9000}\n", "gw.yaml"), flag).http.listen_origin,
             "--http 127.0.0.1:9001");
+}
+
+// Contract "CiA 309-3 ASCII interface": `ascii:` keys reach their fields;
+// the section alone turns the server on at cocomm's default port.
+TEST(Config, AsciiKeysReachTheirFields) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  const Config c = merge(parse_config("ascii:\n  listen: unix:/run/gw/ascii.sock\n  role: viewer\n"
+                                      "  idle-timeout-s: 30\n  max-clients: 4\n",
+                                      "gw.yaml"),
+                         cli);
+  EXPECT_TRUE(c.ascii.enabled);
+  EXPECT_EQ(c.ascii.listen, "unix:/run/gw/ascii.sock");
+  EXPECT_EQ(c.ascii.role, Role::Viewer);
+  EXPECT_EQ(c.ascii.idle_timeout, 30s);
+  EXPECT_EQ(c.ascii.max_clients, 4U);
+  EXPECT_FALSE(merge(Config{}, cli).ascii.enabled) << "off unless asked for";
+  const Config defaults = merge(parse_config("ascii: {}\n", "gw.yaml"), cli);
+  EXPECT_TRUE(defaults.ascii.enabled);
+  EXPECT_EQ(defaults.ascii.listen, "127.0.0.1:60000");
+  EXPECT_EQ(defaults.ascii.role, Role::Operator) << "contract: ascii.role default operator";
+  CliOptions flag = cli;
+  flag.ascii = "127.0.0.1:0";
+  const Config f = merge(parse_config("ascii: {listen: 127.0.0.1:60001}\n", "gw.yaml"), flag);
+  EXPECT_EQ(f.ascii.listen, "127.0.0.1:0") << "the flag wins";
+  EXPECT_EQ(f.ascii.listen_origin, "--ascii 127.0.0.1:0");
+}
+
+// The socket has no authentication of its own: off loopback/unix only with
+// ascii.allow-remote: true, refused otherwise with where the address came from.
+TEST(Config, AsciiOffLoopbackNeedsAllowRemote) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  cli.ascii = "0.0.0.0:60000";
+  EXPECT_THAT(merge_error(Config{}, cli),
+              HasSubstr("--ascii 0.0.0.0:60000: not a loopback address or unix socket, and the ASCII interface has no "
+                        "authentication of its own; set ascii.allow-remote: true"));
+  EXPECT_NO_THROW(merge(parse_config("ascii: {allow-remote: true}\n", "gw.yaml"), cli));
+  CliOptions can_only;
+  can_only.can_interfaces = {"can0"};
+  EXPECT_THAT(merge_error(parse_config("ascii:\n  listen: 10.0.0.1:60000\n", "gw.yaml"), can_only),
+              HasSubstr("gw.yaml:2: ascii.listen 10.0.0.1:60000: not a loopback address"));
+  cli.ascii = "[::1]:60000";
+  EXPECT_NO_THROW(merge(Config{}, cli)) << "IPv6 loopback";
+  cli.ascii = "localhost:60000";
+  EXPECT_NO_THROW(merge(Config{}, cli));
+  cli.ascii = "plc.example:60000";
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("is not ADDR:PORT (an IP address) or unix:/path"));
+  EXPECT_THAT(config_error("ascii: {listen: 60000}\n"), HasSubstr("gw.yaml:1: ascii.listen: '60000' is not ADDR:PORT"));
+  EXPECT_THAT(config_error("ascii: {role: none}\n"), HasSubstr("ascii.role: 'none' is not viewer, operator or admin"));
+  EXPECT_THAT(config_error("ascii: {max-clients: 0}\n"), HasSubstr("ascii.max-clients: 0 is out of range 1..1024"));
+  EXPECT_THAT(config_error("ascii: {port: 1}\n"), HasSubstr("unknown key"));
 }
 
 // The server binds an address and does not resolve names: a name is refused

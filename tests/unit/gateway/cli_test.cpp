@@ -245,6 +245,7 @@ TEST(Cli, HelpDescribesEveryContractFlagWithItsDefault) {
       {"--gateway-id", "else the host"},
       {"--demo", "Default: off"},
       {"--sparkplug", "else off"},
+      {"--ascii", "else off"},
       {"--log-level", "else info"},
   };
   for (const auto& [flag, text] : defaults) {
@@ -257,8 +258,7 @@ TEST(Cli, HelpDescribesEveryContractFlagWithItsDefault) {
   EXPECT_THAT(help_text(), HasSubstr("Exit status"));
 }
 
-// The help names only flags the parser takes (the contract's --ascii
-// comes with a later issue and is not advertised before).
+// The help names only flags the parser takes.
 TEST(Cli, EveryFlagInTheHelpIsAccepted) {
   const std::set<std::string> valueless = {"--demo", "--help", "--version"};
   const std::regex flag(R"(--[a-z][a-z-]*)");
@@ -270,7 +270,7 @@ TEST(Cli, EveryFlagInTheHelpIsAccepted) {
   const std::map<std::string, std::string> sample = {
       {"--config", "gw.yaml"}, {"--can", "can0"},         {"--node-id", "5"},          {"--eds", "5=d.eds"},
       {"--mqtt", "tcp://b:1883"}, {"--mqtt-format", "json"}, {"--http", "127.0.0.1:80"}, {"--gateway-id", "gw"},
-      {"--log-level", "debug"}, {"--sparkplug", "plant1"}};
+      {"--log-level", "debug"}, {"--sparkplug", "plant1"}, {"--ascii", "127.0.0.1:60000"}};
   for (const auto& f : seen) {
     std::vector<std::string> args = {"--demo", f};
     if (!valueless.contains(f)) {
@@ -279,6 +279,16 @@ TEST(Cli, EveryFlagInTheHelpIsAccepted) {
     }
     EXPECT_NO_THROW(parse_cli(args)) << f;
   }
+}
+
+// Contract "CiA 309-3 ASCII interface": --ascii ADDR with ADDR
+// 127.0.0.1:PORT or unix:/path; anything else is refused by name.
+TEST(Cli, AsciiTakesAnAddressOrAUnixPath) {
+  EXPECT_EQ(parse_cli({"--demo", "--ascii", "127.0.0.1:60000"}).ascii, "127.0.0.1:60000");
+  EXPECT_EQ(parse_cli({"--demo", "--ascii=unix:/run/gw/ascii.sock"}).ascii, "unix:/run/gw/ascii.sock");
+  EXPECT_FALSE(parse_cli({"--demo"}).ascii.has_value());
+  for (const char* bad : {"60000", "unix:", "tcp-60000", "host:"})
+    EXPECT_THAT(usage_error({"--demo", "--ascii", bad}), HasSubstr("--ascii: '")) << bad;
 }
 
 TEST(Cli, HelpFitsEightyColumns) {
