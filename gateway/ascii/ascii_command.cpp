@@ -906,11 +906,6 @@ std::string abort_response(std::uint32_t seq, std::uint32_t abort_code) {
          " #" + std::string(canopen::sdo_abort_text(abort_code)) + "\r\n";
 }
 
-std::string abort_after_data(std::uint32_t abort_code) {
-  return "\n...ERROR:" + printf_string("0x%08lX", static_cast<unsigned long>(abort_code)) + " #" +
-         std::string(canopen::sdo_abort_text(abort_code)) + "\r\n";
-}
-
 std::string empty_response() { return "\r\n"; }
 
 std::string_view help_text(HelpTopic topic) {

@@ -277,8 +277,6 @@ class LineFramer {
 std::string ok_response(std::uint32_t seq);                   // "[seq] OK\r\n"
 std::string error_response(std::uint32_t seq, Error e);       // "[seq] ERROR:101 #Syntax error.\r\n"
 std::string abort_response(std::uint32_t seq, std::uint32_t abort_code);  // "[seq] ERROR:0x06020000 #...\r\n"
-// An SDO upload aborted after "[seq] value..." was already written.
-std::string abort_after_data(std::uint32_t abort_code);      // "\n...ERROR:0x05040000 #...\r\n"
 std::string empty_response();                                // "\r\n"
 std::string_view help_text(HelpTopic topic);                 // starts "\n", ends "\r\n"
 // LSS answers (facts B.1): lss_get_node "[seq] 0x05"; one identity word

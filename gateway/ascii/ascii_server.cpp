@@ -185,7 +185,7 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   bool can_read() const {
-    return !closed_ && !reading_ && !input_done_ && out_.size() < cfg_.max_output &&
+    return !closed_ && !reading_ && !input_done_ && buffered() < cfg_.max_output &&
            pending_.size() < kMaxPendingLines;
   }
 
@@ -213,7 +213,7 @@ class Session : public std::enable_shared_from_this<Session> {
 
   // Runs queued lines while no command is running and the output has room.
   void process() {
-    while (!closed_ && !busy_ && !stream_ && !pending_.empty() && out_.size() < cfg_.max_output) {
+    while (!closed_ && !busy_ && !stream_ && !pending_.empty() && buffered() < cfg_.max_output) {
       auto item = std::move(pending_.front());
       pending_.pop_front();
       handle(item);
@@ -369,7 +369,7 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
   void pump() {
-    while (stream_ && out_.size() < cfg_.max_output) {
+    while (stream_ && buffered() < cfg_.max_output) {
       auto& s = *stream_;
       const std::size_t n = std::min(kPrintChunk, s.data.size() - s.pos);
       const bool last = s.pos + n == s.data.size();

@@ -425,7 +425,6 @@ TEST(AsciiResponses, FormattedAsCanopenNodeDoes) {
   EXPECT_EQ(error_response(4, Error::NoDefaultNode), "[4] ERROR:105 #No default node set.\r\n");
   EXPECT_EQ(abort_response(5, 0x06020000).rfind("[5] ERROR:0x06020000 #", 0), 0U);
   EXPECT_TRUE(abort_response(5, 0x06020000).ends_with("\r\n"));
-  EXPECT_EQ(abort_after_data(0x05040000).rfind("\n...ERROR:0x05040000 #", 0), 0U);
   EXPECT_EQ(lss_node_response(1, 5), "[1] 0x05\r\n");
   EXPECT_EQ(lss_word_response(2, 0x5A1), "[2] 0x000005A1\r\n");
   EXPECT_EQ(lss_identity_response(3, {0x5A1, 0x402, 0x20001, 7}), "[3] 0x000005A1 0x00000402 0x00020001 0x00000007\r\n");

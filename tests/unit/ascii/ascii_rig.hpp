@@ -69,6 +69,12 @@ class Client {
     }
   }
   void shutdown_write() { ::shutdown(fd_, SHUT_WR); }
+  // Keeps what the kernel takes from this client small, so a server that
+  // stops reading shows as a send that stops (not hidden by big buffers).
+  void small_send_buffer() {
+    const int size = 64 * 1024;
+    ::setsockopt(fd_, SOL_SOCKET, SO_SNDBUF, &size, sizeof size);
+  }
   // Takes what arrived; false once the server closed the connection.
   bool poll() {
     char buf[65536];

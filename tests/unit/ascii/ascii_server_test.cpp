@@ -203,6 +203,7 @@ TEST(AsciiServer, AClientThatDoesNotReadIsNotBufferedForAndDoesNotBlockOthers) {
   constexpr std::size_t kMaxOutput = 8 * 1024;
   Rig rig([&](ServerConfig& sc) { sc.max_output = kMaxOutput; });
   auto stalled = rig.connect();
+  stalled->small_send_buffer();
   auto other = rig.connect();
   // Each help answer is over 1 KiB; 600000 of them are far more than any
   // socket buffer takes, and so are the 8 MB of commands.

@@ -600,5 +600,41 @@ TEST(RequestCoreLss, BusOffIs503WhenAskedAndAMasterThatCannotSendIs503) {
   EXPECT_FALSE(rig.run(request(LssStore{}))->has_value()) << "not left held";
 }
 
+// CiA 309-3 `set sdo_timeout` / `set sdo_block` (the ASCII front end): an
+// SDO command may carry its own timeout and say block transfer or not; the
+// SDO client's request gets them, and without them the node's defaults hold.
+TEST(RequestCoreSdo, TimeoutAndBlockChoiceReachTheSdoClient) {
+  Rig rig;
+  SdoRead plain{5, 0x1018, 1, canopen::DataType::Unsigned32};
+  rig.run(request(plain));
+  ASSERT_EQ(rig.nets.pending.size(), 1U);
+  EXPECT_FALSE(rig.nets.pending[0].timeout.has_value());
+  EXPECT_EQ(rig.nets.pending[0].mode, canopen::sdo::Mode::Auto);
+  SdoRead no_block = plain;
+  no_block.timeout = std::chrono::milliseconds(50);
+  no_block.block = false;
+  rig.run(request(no_block));
+  EXPECT_EQ(rig.nets.pending[1].timeout, std::chrono::milliseconds(50));
+  EXPECT_EQ(rig.nets.pending[1].mode, canopen::sdo::Mode::Segmented) << "a normal (expedited or segmented) upload";
+  SdoRead block = plain;
+  block.block = true;
+  rig.run(request(block));
+  EXPECT_EQ(rig.nets.pending[2].mode, canopen::sdo::Mode::Block);
+
+  SdoWrite small{5, 0x1017, 0, canopen::DataType::Unsigned16, 500};
+  small.block = false;
+  small.timeout = std::chrono::milliseconds(70);
+  rig.run(request(small));
+  EXPECT_EQ(rig.nets.pending[3].mode, canopen::sdo::Mode::Expedited) << "2 bytes fit an expedited download";
+  EXPECT_EQ(rig.nets.pending[3].timeout, std::chrono::milliseconds(70));
+  SdoWrite big{5, 0x2000, 0, canopen::DataType::Domain, "00112233445566778899"};
+  big.block = false;
+  rig.run(request(big));
+  EXPECT_EQ(rig.nets.pending[4].mode, canopen::sdo::Mode::Segmented);
+  big.block = true;
+  rig.run(request(big));
+  EXPECT_EQ(rig.nets.pending[5].mode, canopen::sdo::Mode::Block);
+}
+
 }  // namespace
 }  // namespace gateway::core
