@@ -16,6 +16,7 @@
 
 #include "app.hpp"
 #include "ascii/ascii_listen.hpp"
+#include "ascii/ascii_lss.hpp"
 #include "ascii/ascii_server.hpp"
 #include "composition.hpp"
 #include "canopen/socketcan/channel.hpp"
@@ -180,6 +181,8 @@ int run(const gateway::CliOptions& opts) {
   std::unique_ptr<gateway::ascii::Server> ascii;
   if (config.ascii.enabled) {
     ascii = std::make_unique<gateway::ascii::Server>(io, ascii_settings(app->config()), app->requests(), &log);
+    // lss_* through the request core's LSS commands (role admin).
+    ascii->set_lss_handler(gateway::ascii::make_lss_handler(app->requests()));
     try {
       ascii->start();
     } catch (const std::system_error& e) {

@@ -412,6 +412,7 @@ async function loadAll() {
       }
       document.body.dataset.loaded = '1';
       connectWs();
+      loadLss();
     } catch (e) {
       if (e.status !== 401) toast(describeError(e), 'error');
       if (e.status !== 401) setTimeout(() => { if (!state.wsOpen) loadAll(); }, 3000);
@@ -1034,6 +1035,114 @@ async function nmt(node, command) {
   }
 }
 
+// ---------------------------------------------------------------- new devices (LSS)
+// Contract "LSS master (CiA 305)": fastscan, the list of what was found,
+// configure (node-ID + store) and assign-all. All need an admin token; the
+// gateway runs one LSS operation per network at a time.
+
+const lssHex = (n) => '0x' + hex(n, 8);
+const lssIdentityText = (id) =>
+  `${lssHex(id.vendorId)} ${lssHex(id.productCode)} ${lssHex(id.revisionNumber)} ${lssHex(id.serialNumber)}`;
+let lssBusy = false;
+
+function lssErrorText(err) {
+  if (!(err instanceof ApiError)) return describeError(err);
+  switch (err.status) {
+    case 404: return `None: ${err.detail}`;
+    case 409: return `Busy: ${err.detail}`;
+    case 422: return `The device refused: ${err.detail}`;
+    case 504: return `No answer: ${err.detail}`;
+    default: return describeError(err);
+  }
+}
+
+function lssStatus(text, kind) {
+  const s = $('#lss-status');
+  setText(s, text);
+  s.classList.toggle('err', kind === 'error');
+}
+
+function renderLss(devices) {
+  const body = $('#lss-body');
+  if (!devices.length) {
+    body.replaceChildren(el('tr', { class: 'empty' }, el('td', { colspan: 3, text: 'no device found' })));
+    return;
+  }
+  body.replaceChildren(...devices.map((d, i) => {
+    const input = el('input', { type: 'number', min: 1, max: 127, class: 'lss-id', 'data-field': 'node-id',
+                                'aria-label': 'Node-ID to assign', value: d.nodeId ?? '' });
+    const row = el('tr', { 'data-lss': i },
+      el('td', { class: 'ident', text: lssIdentityText(d.identity) }),
+      el('td', { class: 'num' }, d.nodeId != null ? el('span', { text: String(d.nodeId) }) : input),
+      el('td', {}, d.nodeId != null ? el('span', { class: 'muted small', text: 'assigned' })
+                                    : el('button', { type: 'button', class: 'btn btn-small', 'data-lss-assign': i, text: 'Assign' })));
+    row.lssIdentity = d.identity;
+    return row;
+  }));
+}
+
+async function loadLss() {
+  try {
+    const r = await api('GET', `/networks/${state.net}/lss/devices`);
+    renderLss(r.devices || []);
+  } catch (e) {
+    if (e.status === 403) lssStatus('Needs an admin token.', 'error');
+  }
+}
+
+// One LSS request at a time from this page; the buttons say so meanwhile.
+async function lssRun(what, fn) {
+  if (lssBusy) return;
+  lssBusy = true;
+  for (const b of document.querySelectorAll('#panel-lss button')) b.disabled = true;
+  lssStatus(what);
+  try {
+    await fn();
+  } catch (e) {
+    lssStatus(lssErrorText(e), e.status === 404 ? 'info' : 'error');
+    if (e.status !== 404) toast(lssErrorText(e), 'error');
+  } finally {
+    lssBusy = false;
+    for (const b of document.querySelectorAll('#panel-lss button')) b.disabled = false;
+    await loadLss();
+  }
+}
+
+function lssScan() {
+  return lssRun('Scanning…', async () => {
+    const r = await api('POST', `/networks/${state.net}/lss/fastscan`, {});
+    lssStatus(`Found ${lssIdentityText(r.identity)}`);
+  });
+}
+
+function lssAssign(row) {
+  const input = row.querySelector('input[data-field=node-id]');
+  const nodeId = Number(input.value);
+  if (!Number.isInteger(nodeId) || nodeId < 1 || nodeId > 127) {
+    lssStatus('Node-ID must be 1..127.', 'error');
+    input.focus();
+    return;
+  }
+  return lssRun(`Assigning node-ID ${nodeId}…`, async () => {
+    await api('POST', `/networks/${state.net}/lss/configure`, { identity: row.lssIdentity, nodeId, store: true });
+    lssStatus(`Node-ID ${nodeId} assigned and stored; the device boots with it.`);
+    toast(`LSS: node-ID ${nodeId} assigned`, 'ok');
+  });
+}
+
+function lssAssignAll() {
+  const firstNodeId = Number($('#lss-first').value);
+  if (!Number.isInteger(firstNodeId) || firstNodeId < 1 || firstNodeId > 127) {
+    lssStatus('First node-ID must be 1..127.', 'error');
+    return;
+  }
+  return lssRun('Assigning all…', async () => {
+    const r = await api('POST', `/networks/${state.net}/lss/assign-all`, { firstNodeId, store: true });
+    const ids = r.assignments.map((a) => a.nodeId);
+    lssStatus(ids.length ? `Assigned node-IDs ${ids.join(', ')} (stored).` : 'No device without a node-ID answered.');
+  });
+}
+
 // ---------------------------------------------------------------- wiring
 
 function setupEvents() {
@@ -1063,6 +1172,15 @@ function setupEvents() {
   let t = null;
   $('#od-filter').addEventListener('input', () => { clearTimeout(t); t = setTimeout(applyOdFilter, 120); });
   $('#emcy-only-node').addEventListener('change', () => { state.dirty.emcy = true; });
+  $('#lss-scan').addEventListener('click', lssScan);
+  $('#lss-assign-all').addEventListener('click', lssAssignAll);
+  $('#lss-body').addEventListener('click', (e) => {
+    const b = e.target.closest('button[data-lss-assign]');
+    if (b) lssAssign(b.closest('tr'));
+  });
+  $('#lss-body').addEventListener('keydown', (e) => {
+    if (e.key === 'Enter' && e.target.matches('input[data-field=node-id]')) lssAssign(e.target.closest('tr'));
+  });
   $('#net-select').addEventListener('change', (e) => {
     state.net = Number(e.target.value);
     state.selected = null;

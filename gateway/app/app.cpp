@@ -40,6 +40,36 @@ std::string pdo_text(const canopen::PdoEvent& ev) {
   return s;
 }
 
+// lss.assign of one network (contract "LSS master", config): entry `i`, then
+// the next once it is answered, each through the request core (so it is
+// audited and holds the network's LSS master like any LSS request). A
+// device that does not answer is logged, never fatal.
+void assign_from_config(core::RequestCore& core, Logger& log, std::string label, std::uint32_t net,
+                        std::vector<LssAssignConfig> list, std::size_t i) {
+  if (i >= list.size()) return;
+  const LssAssignConfig e = list[i];
+  core::Request r;
+  r.caller.authenticated = true;
+  r.caller.role = Role::Admin;
+  r.caller.who = "lss.assign (configuration)";
+  r.caller.key = "configuration";
+  r.network = net;
+  r.command = core::LssConfigure{core::LssAddress{e.vendor_id, e.product_code, e.revision, e.serial}, e.node_id,
+                                 std::nullopt, e.store};
+  core.execute(std::move(r), [&core, &log, label, net, list = std::move(list), i, e](core::Result result) mutable {
+    const std::string what = label + ": lss.assign " +
+                             canopen::lss::to_string({e.vendor_id, e.product_code, e.revision, e.serial}) +
+                             " -> node-ID " + std::to_string(e.node_id);
+    if (const auto* p = std::get_if<core::Problem>(&result)) {
+      log.warn(what + ": not assigned: " + p->detail);
+    } else {
+      log.info(what + ": assigned" + (e.store ? " and stored" : ""));
+    }
+    log.flush();
+    assign_from_config(core, log, label, net, std::move(list), i + 1);
+  });
+}
+
 }  // namespace
 
 
@@ -100,6 +130,73 @@ struct App::CoreNetworks final : core::Networks {
                                   std::function<void(const canopen::pdo::PdoReadReport&)> done) override {
     Net& x = n(net);
     return x.network->read_pdo_config(node, std::move(done), x.now());
+  }
+  // The core's LSS steps on the network's LSS master (canopen/lss/master.hpp),
+  // its errors as the core's outcomes.
+  std::error_code lss(std::uint32_t net, const core::LssStep& step,
+                      std::function<void(const core::LssOutcome&)> done) override {
+    namespace lss = canopen::lss;
+    using S = core::LssOutcome::Status;
+    auto outcome = [](const canopen::Error& e) {
+      core::LssOutcome o;
+      o.detail = e.detail.empty() ? e.code.message() : e.detail;
+      if (e.code == lss::LssError::Timeout) {
+        o.status = S::timeout;
+      } else if (e.code == lss::LssError::NoUnconfiguredSlave) {
+        o.status = S::none_found;
+      } else if (auto b = lss::slave_error_byte(e.code)) {
+        o.status = S::refused;
+        o.error = *b;
+      } else {
+        o.status = S::failed;
+      }
+      return o;
+    };
+    auto ack = [done, outcome](canopen::Result<lss::Ack> r) { done(r ? core::LssOutcome{} : outcome(r.error())); };
+    auto value = [done, outcome](auto r) {
+      if (!r) return done(outcome(r.error()));
+      core::LssOutcome o;
+      o.value = *r;
+      done(o);
+    };
+    Net& x = n(net);
+    auto& m = x.network->lss();
+    const auto now = x.now();
+    if (const auto* g = std::get_if<core::LssSwitchGlobal>(&step))
+      return m.switch_state_global(g->configuration ? lss::Mode::Configuration : lss::Mode::Waiting, ack, now);
+    if (const auto* sel = std::get_if<core::LssSwitchSelective>(&step))
+      return m.switch_state_selective(sel->address, ack, now);
+    if (const auto* id = std::get_if<core::LssSetNodeId>(&step)) return m.configure_node_id(id->node_id, ack, now);
+    if (const auto* bt = std::get_if<core::LssSetBitTiming>(&step))
+      return m.configure_bit_timing(bt->table, bt->index, ack, now);
+    if (const auto* act = std::get_if<core::LssActivateBitTiming>(&step))
+      return m.activate_bit_timing(act->delay_ms, ack, now);
+    if (std::holds_alternative<core::LssStore>(step)) return m.store_configuration(ack, now);
+    if (const auto* q = std::get_if<core::LssInquiry>(&step)) {
+      if (*q == core::LssInquiry::node_id)
+        return m.inquire_node_id([value](canopen::Result<std::uint8_t> r) { value(std::move(r)); }, now);
+      return m.inquire_identity(static_cast<lss::Part>(*q),
+                                [value](canopen::Result<std::uint32_t> r) { value(std::move(r)); }, now);
+    }
+    const auto& f = std::get<core::LssFastscan>(step);
+    lss::FastscanRequest req;
+    if (f.timeout) req.step_timeout = *f.timeout;
+    return m.fastscan(
+        req,
+        [done, outcome](const lss::FastscanResult& r) {
+          if (r.error) return done(outcome(canopen::Error{r.error, {}}));
+          core::LssOutcome o;
+          o.address = r.identity;
+          done(o);
+        },
+        now);
+  }
+  bool node_in_use(std::uint32_t net, std::uint8_t node) const override {
+    const Net& x = n(net);
+    if (node == x.cfg.node_id) return true;
+    for (const auto& c : x.cfg.nodes)
+      if (c.id == node) return true;
+    return app.cache().node(net, node) != nullptr;  // heard on the bus
   }
 };
 
@@ -304,6 +401,7 @@ void App::start() {
     n->local->start(n->now());  // boot-up (7.2.8.3.3), then heartbeats
     n->link.start_simulation();
   }
+  for (auto& n : nets_) assign_from_config(core_, log_, n->label, n->number, n->cfg.lss_assign, 0);
   std::string nets;
   for (const auto& n : nets_) nets += (nets.empty() ? "" : ", ") + n->label;
   log_.info("canopen-gateway started: " + nets + "; version " CANOPEN_GATEWAY_VERSION ", gateway id " +

@@ -4,6 +4,6 @@
 add_library(gateway_ascii_codec STATIC ${CMAKE_CURRENT_LIST_DIR}/ascii_command.cpp ${CMAKE_CURRENT_LIST_DIR}/ascii_listen.cpp)
 target_link_libraries(gateway_ascii_codec PUBLIC gateway_lib canopen_core PRIVATE canopen_options)
 # The server on the io_context: TCP or unix socket, requests through the request core.
-add_library(gateway_ascii STATIC ${CMAKE_CURRENT_LIST_DIR}/ascii_server.cpp)
+add_library(gateway_ascii STATIC ${CMAKE_CURRENT_LIST_DIR}/ascii_server.cpp ${CMAKE_CURRENT_LIST_DIR}/ascii_lss.cpp)
 target_link_libraries(gateway_ascii PUBLIC gateway_ascii_codec gateway_core_types Boost::headers
                                     PRIVATE gateway_core canopen_json canopen_options)

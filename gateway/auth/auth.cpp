@@ -36,6 +36,9 @@ constexpr RouteRole kRouteRoles[] = {
     // Reads the device, but changes how the gateway decodes and produces its PDOs.
     {"POST", "/api/v1/networks/{net}/nodes/{node}/pdo/read", Role::Operator},
     {"POST", "/api/v1/networks/{net}/sync", Role::Operator},
+    // Contract "LSS master (CiA 305), REST (role admin)": the listing too
+    // (the POSTs are admin by default).
+    {"GET", "/api/v1/networks/{net}/lss/devices", Role::Admin},
 };
 
 std::string audit_target(const http::Request& req) { return req.method + " " + req.path; }

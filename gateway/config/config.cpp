@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <cstdlib>
 #include <filesystem>
@@ -203,9 +204,44 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
   }
 }
 
+// lss: {assign: [{identity: {vendor-id, product-code, revision, serial},
+// node-id: N, store: true}]} (contract "LSS master"; CiA 305: the LSS
+// address is the four 1018h values).
+void parse_lss(const At& a, NetworkConfig& net) {
+  a.expect_map({"assign"});
+  std::set<int> ids;
+  std::set<std::array<std::uint32_t, 4>> addresses;
+  for (const auto& item : a.get("assign") ? a.get("assign")->items() : std::vector<At>{}) {
+    item.expect_map({"identity", "node-id", "store"});
+    auto identity = item.get("identity");
+    if (!identity) item.fail("missing key 'identity' ({vendor-id, product-code, revision, serial})");
+    identity->expect_map({"vendor-id", "product-code", "revision", "serial"});
+    LssAssignConfig e;
+    auto word = [&](const char* key) -> std::uint32_t {
+      auto v = identity->get(key);
+      if (!v) identity->fail(std::string("missing key '") + key + "' (all four LSS address parts are needed)");
+      return static_cast<std::uint32_t>(v->integer(0, 0xFFFFFFFF));
+    };
+    e.vendor_id = word("vendor-id");
+    e.product_code = word("product-code");
+    e.revision = word("revision");
+    e.serial = word("serial");
+    auto id = item.get("node-id");
+    if (!id) item.fail("missing key 'node-id' (1..127)");
+    e.node_id = static_cast<std::uint8_t>(id->integer(1, 127));
+    if (e.node_id == net.node_id) id->fail("node " + std::to_string(e.node_id) + " is the gateway's own node-ID");
+    if (!ids.insert(e.node_id).second) id->fail("node-ID " + std::to_string(e.node_id) + " is assigned twice");
+    if (!addresses.insert({e.vendor_id, e.product_code, e.revision, e.serial}).second)
+      identity->fail("this LSS address is listed twice");
+    if (auto v = item.get("store")) e.store = v->boolean();
+    net.lss_assign.push_back(e);
+  }
+}
+
 void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id, const std::string& dir) {
   a.expect_map(
-      {"interface", "simulated", "simulation", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "boot", "nodes"});
+      {"interface", "simulated", "simulation", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "boot", "nodes",
+       "lss"});
   auto iface = a.get("interface");
   if (auto sim = a.get("simulated")) net.simulated = sim->boolean();
   if (net.simulated) {
@@ -256,6 +292,7 @@ void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id
     if (n.id == net.node_id) item.fail("node " + std::to_string(n.id) + " is the gateway's own node-ID");
     net.nodes.push_back(std::move(n));
   }
+  if (auto l = a.get("lss")) parse_lss(*l, net);
 }
 
 Role parse_role(const At& a, bool allow_none = false) {

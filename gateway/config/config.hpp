@@ -89,6 +89,18 @@ struct SimulationConfig {
   std::chrono::milliseconds emcy_period{20000};  // 0 = no periodic EMCY
 };
 
+// One device that `lss.assign` gives its node-ID at start-up (contract "LSS
+// master"): selected by its LSS address (1018h sub 1..4), configured with
+// `node_id`, stored when `store`.
+struct LssAssignConfig {
+  std::uint32_t vendor_id = 0;
+  std::uint32_t product_code = 0;
+  std::uint32_t revision = 0;
+  std::uint32_t serial = 0;
+  std::uint8_t node_id = 0;
+  bool store = true;
+};
+
 struct NetworkConfig {
   std::string interface;     // SocketCAN interface; "" for the simulated demo network
   bool simulated = false;    // --demo or simulated: true: in-process bus with simulated devices
@@ -103,6 +115,9 @@ struct NetworkConfig {
   // get a boot-up sequence that only reads the PDO configuration).
   bool read_pdo_config = false;
   std::vector<NodeConfig> nodes;
+  // lss: {assign: [...]}: at start-up each listed device is selected, given
+  // its node-ID (and stored); an absent device is logged, never fatal.
+  std::vector<LssAssignConfig> lss_assign;
 };
 
 // The MQTT and HTTP settings are the components' own structs

@@ -19,6 +19,23 @@ void register_metrics(metrics::Registry& r, const Counters& counters) {
         return metrics::HistogramValues{
             std::vector<std::uint64_t>(c->sdo_latency_counts.begin(), c->sdo_latency_counts.end()), c->sdo_latency_sum};
       });
+  // LSS (contract "LSS master"): operations by how they ended, node-IDs given.
+  static constexpr std::string_view lss = "canopen_gateway_lss_operations_total";
+  static constexpr std::string_view lss_help =
+      "LSS operations (one per request) by result: ok, timeout (no answer), refused (a slave's error code), "
+      "none-found (fastscan: no unconfigured device), busy (409: another LSS operation ran), failed.";
+  r.family(lss, lss_help, metrics::MetricType::Counter);
+  auto lss_result = [&](const char* result, std::uint64_t Counters::*f) {
+    r.counter_fn(lss, lss_help, {{"result", result}}, [c, f] { return metrics::Value(c->*f); });
+  };
+  lss_result("ok", &Counters::lss_ok);
+  lss_result("timeout", &Counters::lss_timeouts);
+  lss_result("refused", &Counters::lss_refused);
+  lss_result("none-found", &Counters::lss_none_found);
+  lss_result("busy", &Counters::lss_busy);
+  lss_result("failed", &Counters::lss_failed);
+  r.counter_fn("canopen_gateway_lss_node_ids_assigned_total", "Node-IDs given to devices by LSS.", {},
+               [c] { return metrics::Value(c->lss_assigned); });
 }
 
 }  // namespace gateway::core

@@ -64,6 +64,8 @@ Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt) {
       return !nmt || *nmt == canopen::NmtCommand::ResetNode || *nmt == canopen::NmtCommand::ResetCommunication
                  ? Role::Admin
                  : Role::Operator;
+    case Operation::lss:
+      return Role::Admin;  // contract "LSS master (CiA 305), REST (role admin)"
     case Operation::sdo_write:
     case Operation::rpdo_write:
     case Operation::sync:
@@ -73,18 +75,20 @@ Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt) {
   return Role::Admin;
 }
 
-Role required_role(const Command& command) {
-  struct Visitor {
-    Role operator()(const SdoRead&) const { return required_role(Operation::sdo_read); }
-    Role operator()(const SdoWrite&) const { return required_role(Operation::sdo_write); }
-    Role operator()(const Nmt& n) const { return required_role(Operation::nmt, n.command); }
-    Role operator()(const RpdoWrite&) const { return required_role(Operation::rpdo_write); }
-    Role operator()(const Sync&) const { return required_role(Operation::sync); }
-    Role operator()(const PdoConfigRead&) const { return required_role(Operation::pdo_config_read); }
-    Role operator()(const Undecodable& u) const { return required_role(u.operation); }
-  };
-  return std::visit(Visitor{}, command);
-}
+namespace {
+struct RoleOf {
+  Role operator()(const SdoRead&) const { return required_role(Operation::sdo_read); }
+  Role operator()(const SdoWrite&) const { return required_role(Operation::sdo_write); }
+  Role operator()(const Nmt& n) const { return required_role(Operation::nmt, n.command); }
+  Role operator()(const RpdoWrite&) const { return required_role(Operation::rpdo_write); }
+  Role operator()(const Sync&) const { return required_role(Operation::sync); }
+  Role operator()(const PdoConfigRead&) const { return required_role(Operation::pdo_config_read); }
+  Role operator()(const Undecodable& u) const { return required_role(u.operation); }
+  Role operator()(const auto&) const { return required_role(Operation::lss); }  // the LSS commands
+};
+}  // namespace
+
+Role required_role(const Command& command) { return std::visit(RoleOf{}, command); }
 
 std::string_view to_string(Transport t) {
   switch (t) {

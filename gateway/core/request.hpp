@@ -17,8 +17,10 @@
 #include <string_view>
 #include <system_error>
 #include <variant>
+#include <vector>
 
 #include "canopen/events.hpp"
+#include "canopen/lss/frames.hpp"
 #include "canopen/pdo/config_reader.hpp"
 #include "canopen/types.hpp"
 #include "role.hpp"
@@ -44,7 +46,7 @@ struct Caller {
 };
 
 // The operations, for roles and for requests that could not be decoded.
-enum class Operation : std::uint8_t { sdo_read, sdo_write, nmt, rpdo_write, sync, pdo_config_read };
+enum class Operation : std::uint8_t { sdo_read, sdo_write, nmt, rpdo_write, sync, pdo_config_read, lss };
 
 // SDO upload of index/sub from `node` (the gateway's own node-ID: its own
 // dictionary answers). type: as asked, else the node's EDS/DCF entry's, else
@@ -117,7 +119,74 @@ struct Undecodable {
   bool in_address = false;
 };
 
-using Command = std::variant<SdoRead, SdoWrite, Nmt, RpdoWrite, Sync, PdoConfigRead, Undecodable>;
+// ---- LSS (CiA 305; contract "LSS master") -------------------------------------
+// Every LSS command needs role admin (REST, ASCII and any other front end).
+// One LSS operation runs per network at a time; another is refused with 409
+// while it runs (a multi-step one such as LssConfigure holds the network's
+// LSS master from its first frame to its last).
+
+// A device's LSS address: its identity object 1018h sub 1..4.
+using LssAddress = canopen::lss::Identity;
+
+// Fastscan (facts C.2): all slaves back to waiting, then finds one
+// unconfigured device (node-ID FFh) and leaves it in configuration state.
+// `timeout` per step; nullopt = the master's default.
+struct LssFastscan {
+  std::optional<std::chrono::milliseconds> timeout;
+};
+
+// All back to waiting, select `address`, configure its node-ID (and bit
+// timing: `bitrate` in bit/s, one of the CiA 301 table's), store when asked,
+// all back to waiting (an unconfigured device then boots with the new ID).
+struct LssConfigure {
+  LssAddress address;
+  std::uint8_t node_id = 0;
+  std::optional<std::uint32_t> bitrate;
+  bool store = true;
+};
+
+// Fastscan until no unconfigured device answers, giving each found device
+// the next free node-ID from `first_node_id` on (free: not the gateway's,
+// not configured, not heard on the network), storing when asked.
+struct LssAssignAll {
+  std::uint8_t first_node_id = 1;
+  bool store = true;
+  std::optional<std::chrono::milliseconds> timeout;  // per fastscan step
+};
+
+// What the last scan (fastscan or assign-all) on the network found.
+struct LssDevices {};
+
+// The single services (the ASCII interface's lss_* commands), as CiA 305
+// defines them; none switches states by itself.
+struct LssSwitchGlobal {
+  bool configuration = false;  // false: all to waiting
+};
+struct LssSwitchSelective {
+  LssAddress address;
+};
+struct LssSetNodeId {
+  std::uint8_t node_id = 0;  // 1..127, or 0xFF (unconfigured)
+};
+struct LssSetBitTiming {
+  std::uint8_t table = 0;  // 0: the CiA 301 table
+  std::uint8_t index = 0;  // 0=1000 1=800 2=500 3=250 4=125 6=50 7=20 8=10 kbit/s, 9 auto
+};
+struct LssActivateBitTiming {
+  std::uint16_t delay_ms = 0;
+};
+struct LssStore {};
+// The first four in fastscan's part order (canopen::lss::Part).
+enum class LssInquiry : std::uint8_t { vendor_id, product_code, revision, serial, node_id };
+// Inquire of the one device in configuration state: one value, or (nullopt)
+// its whole LSS address.
+struct LssInquire {
+  std::optional<LssInquiry> what;
+};
+
+using Command = std::variant<SdoRead, SdoWrite, Nmt, RpdoWrite, Sync, PdoConfigRead, LssFastscan, LssConfigure,
+                             LssAssignAll, LssDevices, LssSwitchGlobal, LssSwitchSelective, LssSetNodeId,
+                             LssSetBitTiming, LssActivateBitTiming, LssStore, LssInquire, Undecodable>;
 
 struct Request {
   Caller caller;
@@ -161,6 +230,53 @@ struct PdoConfigReport {
   canopen::pdo::PdoReadReport report;
 };
 
+// LSS results.
+// A single LSS service that answers nothing but success (switch, set node-ID,
+// bit timing, store).
+struct LssDone {
+  std::uint32_t network = 0;
+};
+struct LssFound {
+  std::uint32_t network = 0;
+  LssAddress address;
+};
+struct LssAssignment {
+  LssAddress address;
+  std::uint8_t node_id = 0;
+  std::optional<std::uint32_t> bitrate;
+  bool stored = false;
+};
+// LssConfigure: one assignment; LssAssignAll: every one, in order.
+struct LssAssigned {
+  std::uint32_t network = 0;
+  std::vector<LssAssignment> assignments;
+};
+// A device a scan found, with the node-ID given to it since (if any).
+struct LssDeviceSeen {
+  LssAddress address;
+  std::optional<std::uint8_t> node_id;
+};
+struct LssDeviceList {
+  std::uint32_t network = 0;
+  std::vector<LssDeviceSeen> devices;
+};
+struct LssInquired {
+  std::uint32_t network = 0;
+  std::optional<LssInquiry> what;  // nullopt: `address` is the answer
+  std::uint32_t value = 0;         // node-ID or one address word
+  LssAddress address;
+};
+
+// What a device said when it refused an LSS service (CiA 305 error codes).
+enum class LssError : std::uint8_t {
+  manufacturer,           // error code FFh: manufacturer-specific (see the detail)
+  node_id_not_supported,  // configure node-ID, error 1: out of range
+  bitrate_not_supported,  // configure bit timing, error 1
+  store_not_supported,    // store configuration, error 1
+  store_media_error,      // store configuration, error 2: storage media access error
+  other,                  // a code CiA 305 reserves
+};
+
 // A refusal or failure (RFC 9457 problem details, HTTP status semantics).
 struct Problem {
   int status = 500;
@@ -172,9 +288,13 @@ struct Problem {
   // Whether the core had read the command when it refused: only then does
   // a reply echo the correlation id that came inside the command's body.
   bool command_read = true;
+  // An LSS slave's refusal (422): what it meant, for front ends with their
+  // own codes (the ASCII interface's 501..505).
+  std::optional<LssError> lss_error;
 };
 
-using Result = std::variant<SdoValue, NmtSent, RpdoSent, SyncSent, PdoConfigReport, Problem>;
+using Result = std::variant<SdoValue, NmtSent, RpdoSent, SyncSent, PdoConfigReport, LssDone, LssFound, LssAssigned,
+                            LssDeviceList, LssInquired, Problem>;
 
 // A failed SDO transfer or dictionary access as a Problem: remote (the
 // device, or the own dictionary, refused) 422 "SDO abort"; a local timeout
@@ -192,7 +312,7 @@ std::string problem_json(const Problem& p, std::string_view correlation_id = {})
 
 // The role a command needs: SDO read viewer; SDO write, RPDO write, SYNC,
 // PDO configuration read and NMT start/stop/pre-operational operator; NMT
-// reset node / reset communication admin.
+// reset node / reset communication and every LSS command admin.
 Role required_role(const Command& command);
 Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt = std::nullopt);
 

@@ -14,8 +14,12 @@
 //   - SDO semantics: the type (as asked, else the EDS/DCF's, else DOMAIN),
 //     values typed and checked against the EDS/DCF limits before anything
 //     goes on the bus, the gateway's own node answered from its dictionary;
-//   - audit lines for every write, NMT command, SYNC and PDO read, and for
-//     every refusal by role;
+//   - audit lines for every write, NMT command, SYNC, PDO read and LSS
+//     operation, and for every refusal by role;
+//   - LSS (CiA 305): one operation per network at a time (409 otherwise),
+//     multi-step ones (configure, assign-all, fastscan) as a sequence of
+//     single services that ends with all slaves back in waiting state, also
+//     after a failure; the last scan's finds kept per network;
 //   - counters and the SDO latency histogram (/metrics).
 // The core reaches the CAN side only through Networks, which the process
 // (App) implements over its networks and tests fake.
@@ -29,10 +33,14 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <system_error>
+#include <variant>
+#include <vector>
 
 #include "auth.hpp"
 #include "canopen/can/bus_state.hpp"
@@ -53,6 +61,26 @@ struct PdoConfig;
 }
 
 namespace gateway::core {
+
+// One LSS service (CiA 305) as the core asks the network's LSS master for it.
+using LssStep = std::variant<LssSwitchGlobal, LssSwitchSelective, LssSetNodeId, LssSetBitTiming,
+                             LssActivateBitTiming, LssStore, LssInquiry, LssFastscan>;
+
+// How an LssStep ended.
+struct LssOutcome {
+  enum class Status : std::uint8_t {
+    ok,          // done (an unconfirmed service: sent)
+    timeout,     // a confirmed service got no answer in time
+    none_found,  // fastscan: no unconfigured device answered
+    refused,     // the slave answered with an error code
+    failed,      // a local failure (the detail says which)
+  };
+  Status status = Status::ok;
+  std::uint8_t error = 0;     // refused: the slave's error code
+  std::uint32_t value = 0;    // an inquiry's answer
+  LssAddress address;         // fastscan: the device found
+  std::string detail;         // failed: why; refused with FFh: the manufacturer-specific code
+};
 
 // The CAN side as the core needs it. Networks are numbered 1..count(). The
 // core calls only with a network in that range. Implementations let the
@@ -95,6 +123,14 @@ class Networks {
   // error is returned.
   virtual std::error_code read_pdo_config(std::uint32_t net, std::uint8_t node,
                                           std::function<void(const canopen::pdo::PdoReadReport&)> done) = 0;
+  // One LSS service on `net`'s LSS master; `done` runs once, later (a
+  // confirmed service on the answer or timeout, an unconfirmed one once
+  // sent), unless an error is returned. The core sends one at a time per
+  // network and waits for `done` before the next.
+  virtual std::error_code lss(std::uint32_t net, const LssStep& step, std::function<void(const LssOutcome&)> done) = 0;
+  // Whether `node` is taken on `net` (the gateway's own, configured, or
+  // heard): LssAssignAll skips it.
+  virtual bool node_in_use(std::uint32_t net, std::uint8_t node) const = 0;
   // The time for the rate limit and the SDO latency histogram.
   virtual std::chrono::steady_clock::time_point now() const { return std::chrono::steady_clock::now(); }
 };
@@ -107,6 +143,9 @@ struct Counters {
   std::uint64_t auth_failures = 0;          // requests refused with 401/403 here (MQTT, NMT resets)
   std::uint64_t sdo_share_refused = 0;      // 429: the caller held its share of the node's SDO queue
   std::uint64_t requests_rate_limited = 0;  // 429: an unchecked (MQTT) caller over the rate limit
+  // LSS operations (one per request) by how they ended, and node-IDs given.
+  std::uint64_t lss_ok = 0, lss_timeouts = 0, lss_refused = 0, lss_none_found = 0, lss_busy = 0, lss_failed = 0;
+  std::uint64_t lss_assigned = 0;
   // SDO transfers on the bus, submit to result (queueing included), as a
   // Prometheus histogram: count per upper bound (seconds; not cumulative),
   // the last slot for slower ones.
@@ -149,6 +188,11 @@ class RequestCore {
   void rpdo_write(Context& c, const RpdoWrite& cmd);
   void sync(Context& c, const Sync& cmd);
   void pdo_config_read(Context& c, const PdoConfigRead& cmd);
+  // LSS: every LSS command; `lss_busy_` holds the network while one runs.
+  void lss(Context& c, const Command& cmd);
+  struct LssRun;
+  void lss_next(std::shared_ptr<LssRun> run);
+  void lss_finish(const std::shared_ptr<LssRun>& run, Result result);
   // 401/403 (counted, audited) when the caller may not do what needs `need`.
   std::optional<Problem> refused(const Context& c, Role need, std::string_view what, std::uint8_t node,
                                  bool command_read);
@@ -171,6 +215,8 @@ class RequestCore {
   auth::RateLimiter limiter_;
   auth::QueueShares shares_;
   Counters counters_;
+  std::map<std::uint32_t, bool> lss_busy_;                          // per network
+  std::map<std::uint32_t, std::vector<LssDeviceSeen>> lss_found_;  // per network: the last scan's finds
 };
 
 }  // namespace gateway::core

@@ -14,14 +14,19 @@
 //   GET  /api/v1/networks/{net}/nodes/{node}/pdo         the node's PDO configuration in effect and its source
 //   POST /api/v1/networks/{net}/nodes/{node}/pdo/read    read it from the device by SDO, then as GET
 //   POST /api/v1/networks/{net}/sync                     one SYNC, optionally {"counter": n}
+//   POST /api/v1/networks/{net}/lss/fastscan             LSS (CiA 305, role admin): find one unconfigured device
+//   POST /api/v1/networks/{net}/lss/configure            {"identity", "nodeId", "bitrate"?, "store"}
+//   POST /api/v1/networks/{net}/lss/assign-all           {"firstNodeId", "store"}: every unconfigured device
+//   GET  /api/v1/networks/{net}/lss/devices              what the last scan found
 //
 // Errors are application/problem+json (400 malformed, 404 unknown network /
-// node EDS / object / RPDO, 422 SDO abort, 503 bus-off or down, 504 SDO
-// timeout). Protobuf: SDO and NMT requests take `Content-Type:
+// node EDS / object / RPDO or no unconfigured device (LSS fastscan), 409
+// another LSS operation runs, 422 SDO abort or LSS slave error, 503 bus-off
+// or down, 504 SDO or LSS timeout). Protobuf: SDO and NMT requests take `Content-Type:
 // application/x-protobuf` bodies, and SDO replies (and their problems) are
 // binary protobuf with `Accept: application/x-protobuf`; NMT replies are
 // protobuf when the request was. The listings (gateway, network, nodes,
-// node, od, emcy, pdo), RPDO, PDO read and SYNC answer JSON only.
+// node, od, emcy, pdo), RPDO, PDO read, SYNC and LSS answer JSON only.
 //
 // The same routes, /metrics and /api/v1/openapi.json are described in
 // gateway/rest/openapi.json (built into the binary, served as is).

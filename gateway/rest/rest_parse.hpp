@@ -17,6 +17,7 @@
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/types.hpp"
 #include "core/format.hpp"
+#include "core/request.hpp"
 
 namespace gateway::rest {
 
@@ -41,5 +42,19 @@ struct RpdoBody {
 std::optional<RpdoBody> parse_rpdo_body(std::string_view body, const canopen::pdo::PdoConfig& pdo,
                                         const canopen::od::ObjectDictionary& od, std::string_view what,
                                         std::string& error);
+
+// The LSS bodies (contract "LSS master"), as the core's commands. Keys are
+// the contract's and nothing else; identity words and node-IDs are JSON
+// numbers (identity words also "0x..." strings). On failure nullopt and
+// `error` (the detail of a 400).
+//   fastscan:   empty, or {"timeoutMs": 1..10000} (per fastscan step)
+//   configure:  {"identity": {"vendorId", "productCode", "revisionNumber",
+//                "serialNumber"}, "nodeId": 1..127, "bitrate": bit/s
+//                (optional), "store": bool (default true)}
+//   assign-all: {"firstNodeId": 1..127, "store": bool (default true),
+//                "timeoutMs": (optional)}
+std::optional<core::LssFastscan> parse_lss_fastscan(std::string_view body, std::string& error);
+std::optional<core::LssConfigure> parse_lss_configure(std::string_view body, std::string& error);
+std::optional<core::LssAssignAll> parse_lss_assign_all(std::string_view body, std::string& error);
 
 }  // namespace gateway::rest

@@ -5,10 +5,12 @@
 //   1/2: an SDO read, SDO write and NMT body in JSON / binary protobuf
 //      (gateway/messages request_codec), typed with value_as();
 //   3: an RPDO write body against an RPDO of the demo devices' EDS files;
-//   4: a WebSocket filter message (EventFilter).
+//   4: a WebSocket filter message (EventFilter);
+//   5: an LSS fastscan / configure / assign-all body (aux selects).
 // Invariants: nothing crashes or throws; parsed numbers are in range; a
 // parsed index or sub-index reads back from its canonical text; an accepted
-// filter's canonical JSON is accepted again and canonical (a fixed point).
+// filter's canonical JSON is accepted again and canonical (a fixed point);
+// an accepted LSS body has its numbers in range, a refused one says why.
 // fuzz-libs: gateway_rest_parse gateway_http_core gateway_messages canopen_eds
 // fuzz-seeds: tests/fuzz/corpus/rest_request
 #include <cstddef>
@@ -56,6 +58,10 @@ const gateway::http::Router& router() {
     out.add("GET", node + "/emcy", none);
     out.add("PUT", node + "/rpdo/{n}", none);
     out.add("POST", "/api/v1/networks/{net}/sync", none);
+    out.add("POST", "/api/v1/networks/{net}/lss/fastscan", none);
+    out.add("POST", "/api/v1/networks/{net}/lss/configure", none);
+    out.add("POST", "/api/v1/networks/{net}/lss/assign-all", none);
+    out.add("GET", "/api/v1/networks/{net}/lss/devices", none);
     return out;
   }();
   return r;
@@ -192,6 +198,32 @@ void fuzz_filter(std::string_view text, std::uint8_t probe) {
   check(f.matches(ev) == again.matches(ev), "canonical filter matches differently");
 }
 
+// The LSS bodies (contract "LSS master"): accepted ones within the ranges
+// the contract gives, refused ones with a reason.
+void fuzz_lss(std::string_view body, std::uint8_t which) {
+  std::string error;
+  switch (which % 3) {
+    case 0: {
+      auto f = gateway::rest::parse_lss_fastscan(body, error);
+      if (f && f->timeout) check(f->timeout->count() >= 1 && f->timeout->count() <= 10000, "fastscan timeout range");
+      check(f.has_value() || !error.empty(), "fastscan body refused without a reason");
+      break;
+    }
+    case 1: {
+      auto c = gateway::rest::parse_lss_configure(body, error);
+      if (c) check(c->node_id >= 1 && c->node_id <= 127, "configure nodeId range");
+      check(c.has_value() || !error.empty(), "configure body refused without a reason");
+      break;
+    }
+    default: {
+      auto a = gateway::rest::parse_lss_assign_all(body, error);
+      if (a) check(a->first_node_id >= 1 && a->first_node_id <= 127, "assign-all firstNodeId range");
+      check(a.has_value() || !error.empty(), "assign-all body refused without a reason");
+      break;
+    }
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -199,7 +231,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::uint8_t selector = data[0];
   const std::uint8_t aux = data[1];
   const std::string_view input(reinterpret_cast<const char*>(data + 2), size - 2);
-  switch (selector % 5) {
+  switch (selector % 6) {
     case 0:
       fuzz_target(input, aux);
       break;
@@ -212,8 +244,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     case 3:
       fuzz_rpdo(input, aux);
       break;
-    default:
+    case 4:
       fuzz_filter(input, aux);
+      break;
+    default:
+      fuzz_lss(input, aux);
       break;
   }
   return 0;

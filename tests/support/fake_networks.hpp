@@ -5,6 +5,7 @@
 // small one below; a test may replace both).
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <deque>
 #include <optional>
@@ -77,7 +78,22 @@ struct FakeNetworks final : Networks {
                                   std::function<void(const canopen::pdo::PdoReadReport&)>) override {
     return {};
   }
+  std::error_code lss(std::uint32_t, const LssStep& step, std::function<void(const LssOutcome&)> done) override {
+    if (lss_refuse) return lss_refuse;
+    lss_pending.push_back({step, std::move(done)});
+    return {};
+  }
+  bool node_in_use(std::uint32_t, std::uint8_t node) const override {
+    return node == kOwnNode || std::find(in_use.begin(), in_use.end(), node) != in_use.end();
+  }
   std::chrono::steady_clock::time_point now() const override { return t; }
+
+  // Ends the oldest pending LSS step with `o` (default: ok).
+  void lss_answer(LssOutcome o = {}) {
+    auto p = std::move(lss_pending.front());
+    lss_pending.pop_front();
+    p.done(o);
+  }
 
   // Answers the oldest pending transfer.
   void answer(canopen::Bytes data = {}, std::error_code error = {}) {
@@ -106,6 +122,13 @@ struct FakeNetworks final : Networks {
   std::vector<NmtSentFrame> nmt;
   std::vector<std::optional<std::uint8_t>> syncs;
   std::chrono::steady_clock::time_point t{};
+  struct PendingLss {
+    LssStep step;
+    std::function<void(const LssOutcome&)> done;
+  };
+  std::deque<PendingLss> lss_pending;
+  std::error_code lss_refuse;      // lss() returns it (nothing pending)
+  std::vector<std::uint8_t> in_use;  // besides the own node
 };
 
 }  // namespace gateway::core::test_support

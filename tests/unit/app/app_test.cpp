@@ -330,5 +330,50 @@ TEST(AppDemo, NmtStopAndStartOneNodeAndAll) {
   EXPECT_EQ(rig.request(core::Operation::nmt, 10, R"({"command": "jump"})").status, 400);
 }
 
+// Contract "LSS master", config lss.assign (issue 16 item 3): at start-up
+// each listed device is selected by its identity, given its node-ID and
+// stored through the request core (audited); the demo's unconfigured I/O
+// module then boots with it. A device that does not answer is logged, and
+// the gateway runs on.
+TEST(AppDemo, LssAssignFromTheConfigurationAtStartUp) {
+  char* buf = nullptr;
+  std::size_t len = 0;
+  std::FILE* f = open_memstream(&buf, &len);
+  {
+    CliOptions cli;
+    cli.demo = true;
+    cli.gateway_id = "test";
+    Config c = merge(Config{}, cli);
+    c.state_dir.clear();
+    // The demo's new device: the I/O module's 1018h (sub 4 made unique by the simulator).
+    c.networks[0].lss_assign = {LssAssignConfig{0x5A1, 0x8822, 0x10003, 0x55000001, 33, true},
+                                LssAssignConfig{1, 2, 3, 4, 34, true}};
+    boost::asio::io_context io;
+    Logger log(LogLevel::Info, f);
+    App app(io, c, log);
+    app.start();
+    const auto end = std::chrono::steady_clock::now() + 10s;
+    auto booted = [&] {
+      const auto* n = app.cache().node(1, 33);
+      return n != nullptr && n->state.has_value();
+    };
+    while (!(booted() && app.requests().counters().lss_timeouts > 0) && std::chrono::steady_clock::now() < end)
+      io.run_for(10ms);
+    EXPECT_TRUE(booted()) << "node 33 never booted";
+    EXPECT_EQ(app.requests().counters().lss_assigned, 1u);
+    EXPECT_EQ(app.requests().counters().lss_timeouts, 1u);
+    EXPECT_TRUE(app.cache().node(1, 5) != nullptr) << "the other devices run as before";
+    app.stop();
+    log.flush();
+  }
+  std::fclose(f);
+  const std::string text(buf, len);
+  std::free(buf);
+  EXPECT_THAT(text, HasSubstr("lss.assign vendor 0x000005A1 product 0x00008822 revision 0x00010003 serial 0x55000001 "
+                              "-> node-ID 33: assigned and stored"));
+  EXPECT_THAT(text, HasSubstr("-> node-ID 34: not assigned: no device with vendor 0x00000001"));
+  EXPECT_THAT(text, HasSubstr("audit: LSS configure by lss.assign (configuration): net 1"));
+}
+
 }  // namespace
 }  // namespace gateway

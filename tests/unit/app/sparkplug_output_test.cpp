@@ -394,7 +394,7 @@ TEST(SparkplugOutput, BootUpGivesADbirthWithPdoAndListedMetrics) {
 TEST(SparkplugOutput, AFailedListedReadIsNullAndLogged) {
   Rig rig;
   rig.boot_up();
-  rig.fake.answer(0, core::Problem{504, "SDO timeout", {}, {}, 0x05040000, 0, true});
+  rig.fake.answer(0, core::Problem{504, "SDO timeout", {}, {}, 0x05040000, 0, true, {}});
   rig.fake.answer(1, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned32, 7)});
   const auto dbirth = rig.published("DBIRTH");
   ASSERT_EQ(dbirth.size(), 1u);
@@ -605,7 +605,7 @@ TEST(SparkplugOutput, ARefusedWriteChangesNothingAndIsLogged) {
   rig.boot_up();
   rig.answer_reads();
   rig.dcmd("Speed", pb::UInt16, 500);
-  rig.fake.answer(2, core::Problem{422, "SDO abort: value too high", {}, {}, 0x06090031, 0, true});
+  rig.fake.answer(2, core::Problem{422, "SDO abort: value too high", {}, {}, 0x06090031, 0, true, {}});
   EXPECT_TRUE(rig.published("DDATA").empty());
   EXPECT_NE(rig.logged().find("write of \"Speed\" (2200h sub 0) refused (422 SDO abort: value too high)"), std::string::npos);
   rig.dcmd("Speed", pb::UInt16, 1001);

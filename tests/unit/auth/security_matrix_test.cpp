@@ -49,6 +49,15 @@ const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
     {{"GET", "/api/v1/networks/{net}/nodes/{node}/pdo"}, {Role::Viewer, ""}},
     {{"POST", "/api/v1/networks/{net}/nodes/{node}/pdo/read"}, {Role::Operator, ""}},
     {{"POST", "/api/v1/networks/{net}/sync"}, {Role::Operator, "{}"}},
+    // Contract "LSS master (CiA 305), REST (role admin)"; run in this order by
+    // the admin: the scan finds the demo's unconfigured device, configure
+    // gives it node-ID 30, then nobody is left for assign-all (200, none).
+    {{"POST", "/api/v1/networks/{net}/lss/fastscan"}, {Role::Admin, R"({"timeoutMs":5})"}},
+    {{"POST", "/api/v1/networks/{net}/lss/configure"},
+     {Role::Admin, R"({"identity":{"vendorId":1441,"productCode":34850,"revisionNumber":65539,)"
+                   R"("serialNumber":1426063361},"nodeId":30})"}},
+    {{"POST", "/api/v1/networks/{net}/lss/assign-all"}, {Role::Admin, R"({"firstNodeId":40,"timeoutMs":5})"}},
+    {{"GET", "/api/v1/networks/{net}/lss/devices"}, {Role::Admin, ""}},
     {{"GET", "/api/v1/openapi.json"}, {Role::None, ""}},
     {{"GET", "/metrics"}, {Role::Viewer, ""}},
 };

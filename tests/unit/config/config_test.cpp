@@ -181,7 +181,7 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
   EXPECT_EQ(config_error("networks:\n  - interface: can0\n    bitrat: 5\n"),
             "gw.yaml:3: networks[0].bitrat: unknown key (known here: interface, simulated, simulation, bitrate, node-id, "
             "heartbeat-ms, "
-            "sync, time, boot, nodes)");
+            "sync, time, boot, nodes, lss)");
   EXPECT_THAT(config_error("networks:\n  - bitrate: 500000\n"), HasSubstr("networks[0]: missing key 'interface'"));
   EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        eds: /nope.eds\n"),
               HasSubstr("gw.yaml:5: networks[0].nodes[0].eds: file '/nope.eds' not found"));
@@ -247,6 +247,53 @@ TEST(Config, SparkplugKeysReachTheirFields) {
                                           {0x2002, 0x1F}}));
   EXPECT_TRUE(parse_config("", "gw.yaml").networks.empty());
   EXPECT_FALSE(parse_config("", "gw.yaml").sparkplug.enabled) << "off unless configured";
+}
+
+// Contract "LSS master" (item 3 of issue 16): lss.assign per network gives
+// known devices (their LSS address, CiA 305 = 1018h sub 1..4) their node-ID
+// at start-up; store defaults to true. Mistakes are one line with the key.
+TEST(Config, LssAssignPerNetwork) {
+  const std::string yaml = "networks:\n  - interface: can0\n    lss:\n      assign:\n"
+                           "        - identity: {vendor-id: 0x12345678, product-code: 2, revision: 3, serial: 0xFFFFFFFF}\n"
+                           "          node-id: 42\n"
+                           "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                           "          node-id: 43\n          store: false\n";
+  const Config c = parse_config(yaml, "gw.yaml");
+  ASSERT_EQ(c.networks[0].lss_assign.size(), 2u);
+  const auto& a = c.networks[0].lss_assign[0];
+  EXPECT_EQ(a.vendor_id, 0x12345678u);
+  EXPECT_EQ(a.product_code, 2u);
+  EXPECT_EQ(a.revision, 3u);
+  EXPECT_EQ(a.serial, 0xFFFFFFFFu);
+  EXPECT_EQ(a.node_id, 42);
+  EXPECT_TRUE(a.store) << "stored unless told otherwise";
+  EXPECT_FALSE(c.networks[0].lss_assign[1].store);
+  EXPECT_TRUE(parse_config("networks:\n  - interface: can0\n", "gw.yaml").networks[0].lss_assign.empty());
+
+  const std::string net = "networks:\n  - interface: can0\n    lss:\n      assign:\n";
+  EXPECT_THAT(config_error(net + "        - identity: {vendor-id: 1, product-code: 2, revision: 3}\n          node-id: 5\n"),
+              HasSubstr("networks[0].lss.assign[0].identity: missing key 'serial'"));
+  EXPECT_THAT(config_error(net + "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 128\n"),
+              HasSubstr("gw.yaml:6: networks[0].lss.assign[0].node-id: 128 is out of range 1..127"));
+  EXPECT_THAT(config_error(net + "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 127\n"),
+              HasSubstr("node-id: node 127 is the gateway's own node-ID"));
+  EXPECT_THAT(config_error(net + "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 5\n"
+                                 "        - identity: {vendor-id: 9, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 5\n"),
+              HasSubstr("node-ID 5 is assigned twice"));
+  EXPECT_THAT(config_error(net + "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 5\n"
+                                 "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 6\n"),
+              HasSubstr("this LSS address is listed twice"));
+  EXPECT_THAT(config_error(net + "        - identity: {vendor-id: 1, product-code: 2, revision: 3, serial: 4}\n"
+                                 "          node-id: 5\n          stored: true\n"),
+              HasSubstr("lss.assign[0].stored: unknown key"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    lss: {scan: true}\n"),
+              HasSubstr("networks[0].lss.scan: unknown key (known here: assign)"));
 }
 
 // merge(): the edge node id is the gateway id, the broker mqtt's (with its

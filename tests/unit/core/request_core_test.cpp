@@ -70,7 +70,7 @@ Request request(Command cmd, Caller caller = checked(Role::Admin), std::uint32_t
 }
 
 const Problem& problem_of(const std::shared_ptr<std::optional<Result>>& r) {
-  static const Problem none{0, "no problem", {}, {}, {}, 0, true};
+  static const Problem none{0, "no problem", {}, {}, {}, 0, true, {}};
   if (!r->has_value() || !std::holds_alternative<Problem>(**r)) {
     ADD_FAILURE() << "not a problem";
     return none;
@@ -326,6 +326,278 @@ TEST(RequestCoreOther, SyncAndPdoReadAreAuditedAndChecked) {
   EXPECT_EQ(problem_of(rpdo).detail, "node 42 has no EDS/DCF, so its RPDOs are unknown");
   const auto unused = rig.run(request(RpdoWrite{kDescribed, 1, "{}"}));
   EXPECT_EQ(problem_of(unused).status, 404);
+}
+
+// ---- LSS (contract "LSS master", facts C) ------------------------------------
+
+using S = LssOutcome::Status;
+const LssAddress kDev{0x0000ABCD, 0x401, 2, 1001};
+const LssAddress kDev2{0x0000ABCD, 0x401, 2, 1002};
+
+// The steps the fake LSS master got, answered ok one by one until none is
+// pending; returns them in order.
+std::vector<LssStep> answer_all_ok(Rig& rig) {
+  std::vector<LssStep> sent;
+  while (!rig.nets.lss_pending.empty()) {
+    sent.push_back(rig.nets.lss_pending.front().step);
+    rig.nets.lss_answer();
+  }
+  return sent;
+}
+
+template <typename T>
+const T& step_as(const LssStep& s) {
+  static const T none{};
+  if (!std::holds_alternative<T>(s)) {
+    ADD_FAILURE() << "step " << s.index() << " is not the one expected";
+    return none;
+  }
+  return std::get<T>(s);
+}
+
+TEST(RequestCoreLss, EveryLssCommandNeedsAdminAndRefusalsAreAudited) {
+  Rig rig;
+  for (Command cmd : std::vector<Command>{LssFastscan{}, LssConfigure{kDev, 42, {}, true}, LssAssignAll{},
+                                          LssSwitchGlobal{true}, LssStore{}, LssInquire{}, LssDevices{}}) {
+    EXPECT_EQ(problem_of(rig.run(request(cmd, checked(Role::Operator)))).status, 403);
+  }
+  EXPECT_TRUE(rig.audited("auth failure: op@10.0.0.7: LSS net 1 node 0: 403"));
+  EXPECT_TRUE(rig.nets.lss_pending.empty()) << "nothing reached the bus";
+  EXPECT_EQ(required_role(Command{LssInquire{}}), Role::Admin);
+}
+
+TEST(RequestCoreLss, FastscanSwitchesAllToWaitingFirstAndRemembersTheDevice) {
+  Rig rig;
+  const auto r = rig.run(request(LssFastscan{std::chrono::milliseconds(25)}));
+  ASSERT_EQ(rig.nets.lss_pending.size(), 1u) << "one step at a time";
+  EXPECT_FALSE(step_as<LssSwitchGlobal>(rig.nets.lss_pending.front().step).configuration);
+  rig.nets.lss_answer();
+  ASSERT_EQ(rig.nets.lss_pending.size(), 1u);
+  EXPECT_EQ(step_as<LssFastscan>(rig.nets.lss_pending.front().step).timeout, std::chrono::milliseconds(25));
+  LssOutcome found;
+  found.address = kDev;
+  rig.nets.lss_answer(found);
+  ASSERT_TRUE(std::holds_alternative<LssFound>(**r));
+  EXPECT_EQ(std::get<LssFound>(**r).address, kDev);
+  EXPECT_TRUE(rig.nets.lss_pending.empty()) << "the device stays selected (contract: leaves it selected)";
+  EXPECT_TRUE(rig.audited("LSS fastscan by op@10.0.0.7: net 1: found vendor 0x0000ABCD product 0x00000401"));
+  const auto list = rig.run(request(LssDevices{}));
+  ASSERT_TRUE(std::holds_alternative<LssDeviceList>(**list));
+  ASSERT_EQ(std::get<LssDeviceList>(**list).devices.size(), 1u);
+  EXPECT_EQ(std::get<LssDeviceList>(**list).devices[0].address, kDev);
+  EXPECT_FALSE(std::get<LssDeviceList>(**list).devices[0].node_id.has_value());
+  // The other network has its own list.
+  const auto other = rig.run(request(LssDevices{}, checked(Role::Admin), 2));
+  EXPECT_TRUE(std::get<LssDeviceList>(**other).devices.empty());
+}
+
+TEST(RequestCoreLss, FastscanWithNobodyUnconfiguredIs404AndClearsTheList) {
+  Rig rig;
+  rig.run(request(LssFastscan{}));
+  answer_all_ok(rig);  // found {} (address 0) - a device
+  const auto r = rig.run(request(LssFastscan{}));
+  rig.nets.lss_answer();  // waiting
+  LssOutcome none;
+  none.status = S::none_found;
+  rig.nets.lss_answer(none);
+  // Back to waiting once more, then the answer.
+  ASSERT_EQ(rig.nets.lss_pending.size(), 1u);
+  EXPECT_FALSE(r->has_value());
+  rig.nets.lss_answer();
+  EXPECT_EQ(problem_of(r).status, 404);
+  EXPECT_THAT(problem_of(r).detail, HasSubstr("no unconfigured device answered"));
+  const auto list = rig.run(request(LssDevices{}));
+  EXPECT_TRUE(std::get<LssDeviceList>(**list).devices.empty()) << "what the last scan found: nothing";
+  EXPECT_EQ(rig.core.counters().lss_none_found, 1u);
+}
+
+TEST(RequestCoreLss, ConfigureSelectsSetsIdAndBitTimingStoresAndSwitchesBack) {
+  Rig rig;
+  rig.run(request(LssFastscan{}));
+  LssOutcome found;
+  found.address = kDev;
+  rig.nets.lss_answer();
+  rig.nets.lss_answer(found);
+  const auto r = rig.run(request(LssConfigure{kDev, 42, 500000, true}));
+  const auto steps = answer_all_ok(rig);
+  ASSERT_EQ(steps.size(), 6u);
+  EXPECT_FALSE(step_as<LssSwitchGlobal>(steps[0]).configuration) << "nobody else stays selected";
+  EXPECT_EQ(step_as<LssSwitchSelective>(steps[1]).address, kDev);
+  EXPECT_EQ(step_as<LssSetNodeId>(steps[2]).node_id, 42);
+  EXPECT_EQ(step_as<LssSetBitTiming>(steps[3]).table, 0);
+  EXPECT_EQ(step_as<LssSetBitTiming>(steps[3]).index, 2) << "500 kbit/s is index 2 of the CiA 301 table (facts B.1)";
+  EXPECT_TRUE(std::holds_alternative<LssStore>(steps[4]));
+  EXPECT_FALSE(step_as<LssSwitchGlobal>(steps[5]).configuration) << "the device then boots with its new node-ID";
+  ASSERT_TRUE(std::holds_alternative<LssAssigned>(**r));
+  const auto& a = std::get<LssAssigned>(**r).assignments;
+  ASSERT_EQ(a.size(), 1u);
+  EXPECT_EQ(a[0].node_id, 42);
+  EXPECT_TRUE(a[0].stored);
+  EXPECT_EQ(a[0].bitrate, 500000u);
+  EXPECT_TRUE(rig.audited("LSS configure by op@10.0.0.7: net 1 vendor 0x0000ABCD product 0x00000401 revision "
+                          "0x00000002 serial 0x000003E9 -> node-ID 42, 500000 bit/s, store: ok"));
+  const auto list = rig.run(request(LssDevices{}));
+  EXPECT_EQ(std::get<LssDeviceList>(**list).devices.at(0).node_id, 42) << "the scanned device now has its ID";
+  EXPECT_EQ(rig.core.counters().lss_assigned, 1u);
+  // Without store and bit rate: no store, no bit timing.
+  rig.run(request(LssConfigure{kDev2, 43, {}, false}));
+  EXPECT_EQ(answer_all_ok(rig).size(), 4u);
+}
+
+TEST(RequestCoreLss, ConfigureOfAnAbsentDeviceIs504AndSetsNothing) {
+  Rig rig;
+  const auto r = rig.run(request(LssConfigure{kDev, 42, {}, true}));
+  rig.nets.lss_answer();  // waiting
+  LssOutcome timeout;
+  timeout.status = S::timeout;
+  rig.nets.lss_answer(timeout);  // selective: nobody has that address
+  ASSERT_EQ(rig.nets.lss_pending.size(), 1u);
+  EXPECT_FALSE(step_as<LssSwitchGlobal>(rig.nets.lss_pending.front().step).configuration);
+  rig.nets.lss_answer();
+  EXPECT_EQ(problem_of(r).status, 504);
+  EXPECT_THAT(problem_of(r).detail, HasSubstr("no device with vendor 0x0000ABCD"));
+  EXPECT_THAT(problem_of(r).detail, HasSubstr("(switch state selective)"));
+  EXPECT_TRUE(rig.audited("-> node-ID 42, store: 504 no device with"));
+  EXPECT_EQ(rig.core.counters().lss_timeouts, 1u);
+  EXPECT_EQ(rig.core.counters().lss_assigned, 0u);
+}
+
+// CiA 305 error codes of configure node-ID and store (facts C.1) as 422
+// with their meaning, and the network free again afterwards.
+TEST(RequestCoreLss, ASlaveErrorIs422WithItsCia305Meaning) {
+  Rig rig;
+  auto r = rig.run(request(LssConfigure{kDev, 42, {}, true}));
+  rig.nets.lss_answer();
+  rig.nets.lss_answer();
+  rig.nets.lss_answer();  // node-ID set
+  LssOutcome refused;
+  refused.status = S::refused;
+  refused.error = 2;
+  rig.nets.lss_answer(refused);  // store
+  rig.nets.lss_answer();         // back to waiting
+  EXPECT_EQ(problem_of(r).status, 422);
+  EXPECT_EQ(problem_of(r).lss_error, LssError::store_media_error);
+  EXPECT_EQ(problem_of(r).detail, "the device refused store configuration: storage media access error (error code 2)");
+  r = rig.run(request(LssSetNodeId{100}));
+  refused.error = 1;
+  rig.nets.lss_answer(refused);
+  EXPECT_EQ(problem_of(r).lss_error, LssError::node_id_not_supported);
+  EXPECT_EQ(problem_of(r).detail, "the device refused configure node-ID: node-ID 100 is out of range (error code 1)");
+  EXPECT_TRUE(rig.nets.lss_pending.empty()) << "a single service switches nothing by itself";
+  r = rig.run(request(LssSetBitTiming{0, 4}));
+  refused.error = 0xFF;
+  refused.detail = "specific error 7";
+  rig.nets.lss_answer(refused);
+  EXPECT_EQ(problem_of(r).lss_error, LssError::manufacturer);
+  EXPECT_THAT(problem_of(r).detail, HasSubstr("manufacturer-specific error (error code FFh): specific error 7"));
+  EXPECT_EQ(rig.core.counters().lss_refused, 3u);
+}
+
+TEST(RequestCoreLss, OneLssOperationPerNetworkAtATime) {
+  Rig rig;
+  const auto first = rig.run(request(LssFastscan{}));
+  const auto second = rig.run(request(LssConfigure{kDev, 42, {}, true}));
+  EXPECT_EQ(problem_of(second).status, 409);
+  EXPECT_THAT(problem_of(second).detail, HasSubstr("another LSS operation runs on network 1"));
+  // Another network is not held; the list can always be read.
+  EXPECT_FALSE(rig.run(request(LssFastscan{}, checked(Role::Admin), 2))->has_value());
+  EXPECT_TRUE(std::holds_alternative<LssDeviceList>(**rig.run(request(LssDevices{}))));
+  answer_all_ok(rig);
+  EXPECT_TRUE(first->has_value());
+  EXPECT_FALSE(rig.run(request(LssStore{}))->has_value()) << "free again once answered";
+  EXPECT_EQ(rig.core.counters().lss_busy, 1u);
+}
+
+// Contract: assign-all fastscans until nobody unconfigured answers, giving
+// each the next free node-ID (facts C.4 item 1).
+TEST(RequestCoreLss, AssignAllGivesEachFoundDeviceTheNextFreeNodeId) {
+  Rig rig;
+  rig.nets.in_use = {3};
+  const auto r = rig.run(request(LssAssignAll{2, true, std::chrono::milliseconds(50)}));
+  std::vector<LssStep> steps;
+  auto next = [&](LssOutcome o = {}) {
+    steps.push_back(rig.nets.lss_pending.front().step);
+    rig.nets.lss_answer(o);
+  };
+  next();  // waiting
+  LssOutcome found;
+  found.address = kDev;
+  next(found);
+  next();  // node-ID
+  next();  // store
+  next();  // waiting
+  found.address = kDev2;
+  next(found);
+  next();
+  next();
+  next();
+  LssOutcome none;
+  none.status = S::none_found;
+  next(none);
+  EXPECT_TRUE(rig.nets.lss_pending.empty());
+  ASSERT_EQ(steps.size(), 10u);
+  EXPECT_EQ(step_as<LssSetNodeId>(steps[2]).node_id, 2);
+  EXPECT_EQ(step_as<LssSetNodeId>(steps[6]).node_id, 4) << "3 is in use on the network";
+  EXPECT_EQ(step_as<LssFastscan>(steps[5]).timeout, std::chrono::milliseconds(50));
+  ASSERT_TRUE(std::holds_alternative<LssAssigned>(**r));
+  const auto& a = std::get<LssAssigned>(**r).assignments;
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a[0].address, kDev);
+  EXPECT_EQ(a[1].address, kDev2);
+  EXPECT_EQ(a[1].node_id, 4);
+  EXPECT_TRUE(a[1].stored);
+  const auto list = std::get<LssDeviceList>(**rig.run(request(LssDevices{})));
+  ASSERT_EQ(list.devices.size(), 2u);
+  EXPECT_EQ(list.devices[1].node_id, 4);
+  EXPECT_TRUE(rig.audited("LSS assign-all by op@10.0.0.7: net 1 from node-ID 2, store: 2 assigned"));
+  EXPECT_EQ(rig.core.counters().lss_assigned, 2u);
+}
+
+TEST(RequestCoreLss, BadArgumentsAre400AndSendNothing) {
+  Rig rig;
+  EXPECT_EQ(problem_of(rig.run(request(LssConfigure{kDev, 0, {}, true}))).detail, "nodeId must be 1..127, not 0");
+  EXPECT_EQ(problem_of(rig.run(request(LssConfigure{kDev, kOwnNode, {}, true}))).detail,
+            "node-ID 127 is the gateway's own on this network");
+  EXPECT_THAT(problem_of(rig.run(request(LssConfigure{kDev, 5, 300000, true}))).detail,
+              HasSubstr("bitrate 300000 is not in the CiA 301 table"));
+  EXPECT_EQ(problem_of(rig.run(request(LssAssignAll{0, true, {}}))).status, 400);
+  EXPECT_EQ(problem_of(rig.run(request(LssSetNodeId{128}))).status, 400);
+  EXPECT_TRUE(rig.nets.lss_pending.empty());
+  EXPECT_FALSE(rig.run(request(LssSetNodeId{0xFF}))->has_value()) << "FFh unconfigures (facts C.1)";
+}
+
+TEST(RequestCoreLss, InquireWithoutAPartAsksForAllFour) {
+  Rig rig;
+  const auto r = rig.run(request(LssInquire{}));
+  std::vector<LssStep> steps;
+  for (std::uint32_t v : {0xABCDu, 0x401u, 2u, 1001u}) {
+    steps.push_back(rig.nets.lss_pending.front().step);
+    LssOutcome o;
+    o.value = v;
+    rig.nets.lss_answer(o);
+  }
+  ASSERT_TRUE(std::holds_alternative<LssInquired>(**r));
+  EXPECT_EQ(std::get<LssInquired>(**r).address, kDev);
+  EXPECT_EQ(step_as<LssInquiry>(steps[3]), LssInquiry::serial);
+  const auto id = rig.run(request(LssInquire{LssInquiry::node_id}));
+  LssOutcome o;
+  o.value = 42;
+  rig.nets.lss_answer(o);
+  EXPECT_EQ(std::get<LssInquired>(**id).value, 42u);
+}
+
+TEST(RequestCoreLss, BusOffIs503WhenAskedAndAMasterThatCannotSendIs503) {
+  Rig rig;
+  rig.nets.bus = canopen::can::BusState::BusOff;
+  auto req = request(LssFastscan{});
+  req.check_bus = true;
+  EXPECT_EQ(problem_of(rig.run(req)).status, 503);
+  rig.nets.bus = canopen::can::BusState::ErrorActive;
+  rig.nets.lss_refuse = std::make_error_code(std::errc::no_buffer_space);
+  const auto r = rig.run(request(LssStore{}));
+  EXPECT_EQ(problem_of(r).status, 503);
+  rig.nets.lss_refuse = {};
+  EXPECT_FALSE(rig.run(request(LssStore{}))->has_value()) << "not left held";
 }
 
 // CiA 309-3 `set sdo_timeout` / `set sdo_block` (the ASCII front end): an
