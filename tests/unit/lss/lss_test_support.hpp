@@ -13,22 +13,12 @@
 #include "canopen/clock.hpp"
 #include "canopen/lss/master.hpp"
 #include "canopen/lss/slave.hpp"
+#include "support/frames.hpp"
 
 namespace canopen::lss::test {
 
-struct FrameLog {
-  std::vector<std::string> frames;
-  FrameSink sink() {
-    return [this](const can::Frame& f) { frames.push_back(can::to_string(f)); };
-  }
-  std::vector<std::string> take() {
-    std::vector<std::string> out;
-    out.swap(frames);
-    return out;
-  }
-};
-
-inline can::Frame parse(const std::string& text) { return can::parse_frame(text).value(); }
+using canopen::test::FrameLog;
+using canopen::test::parse;
 
 // One master and the slaves on a MemoryBus; time only moves in run().
 struct LssBus {
