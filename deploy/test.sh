@@ -23,5 +23,5 @@ ctest --preset asan -j "$jobs"
 echo "== build (clang, libFuzzer, ASan + UBSan)"
 cmake --preset fuzz
 cmake --build --preset fuzz -j "$jobs"
-echo "== fuzz: EDS reader, SDO server, SDO client, NMT/EMCY/PDO decoding, REST/WebSocket request decoding; a fixed number of inputs each"
+echo "== fuzz: EDS reader, SDO server, SDO client, NMT/EMCY/PDO decoding, MQTT codec, REST/WebSocket request decoding, Sparkplug commands, ASCII lines; a fixed number of inputs each"
 ctest --preset fuzz -j "$jobs"
