@@ -54,11 +54,11 @@ void assign_from_config(core::RequestCore& core, Logger& log, std::string label,
   r.caller.who = "lss.assign (configuration)";
   r.caller.key = "configuration";
   r.network = net;
-  r.command = core::LssConfigure{core::LssAddress{e.vendor_id, e.product_code, e.revision, e.serial}, e.node_id,
+  r.command = core::LssConfigure{e.identity, e.node_id,
                                  std::nullopt, e.store};
   core.execute(std::move(r), [&core, &log, label, net, list = std::move(list), i, e](core::Result result) mutable {
     const std::string what = label + ": lss.assign " +
-                             canopen::lss::to_string({e.vendor_id, e.product_code, e.revision, e.serial}) +
+                             canopen::lss::to_string(e.identity) +
                              " -> node-ID " + std::to_string(e.node_id);
     if (const auto* p = std::get_if<core::Problem>(&result)) {
       log.warn(what + ": not assigned: " + p->detail);

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "canopen/events.hpp"
+#include "canopen/lss/frames.hpp"
 #include "canopen/types.hpp"
 
 namespace gateway::ascii {
@@ -111,10 +112,8 @@ std::string print_value(Datatype t, std::span<const std::uint8_t> data);
 // ---- commands --------------------------------------------------------------
 
 // The identity of an LSS slave (1018h sub 1..4).
-struct LssIdentity {
-  std::uint32_t vendor_id = 0, product_code = 0, revision = 0, serial = 0;
-  friend bool operator==(const LssIdentity&, const LssIdentity&) = default;
-};
+// The LSS address (1018h sub 1..4) as the stack and the request core have it.
+using LssIdentity = canopen::lss::Identity;
 
 // lss_allnodes' scan type per identity word: 0 fastscan, 1 ignore, 2 match.
 enum class LssScan : std::uint8_t { scan = 0, ignore = 1, match = 2 };

@@ -10,11 +10,6 @@ namespace gateway::ascii {
 
 namespace {
 
-core::LssAddress address_of(const LssIdentity& id) {
-  return core::LssAddress{id.vendor_id, id.product_code, id.revision, id.serial};
-}
-LssIdentity identity_of(const core::LssAddress& a) { return LssIdentity{a.vendor_id, a.product_code, a.revision, a.serial}; }
-
 // A refusal or failure of the core as CANopenNode's gateway answers an LSS
 // command (its error codes, facts B.1).
 std::string problem_text(std::uint32_t seq, const core::Problem& p) {
@@ -58,7 +53,7 @@ std::optional<core::Command> command_of(const LssCommand& cmd) {
         if constexpr (std::is_same_v<T, LssSwitchGlobal>) {
           return core::LssSwitchGlobal{c.configuration};
         } else if constexpr (std::is_same_v<T, LssSwitchSelective>) {
-          return core::LssSwitchSelective{address_of(c.identity)};
+          return core::LssSwitchSelective{c.identity};
         } else if constexpr (std::is_same_v<T, LssSetNode>) {
           return core::LssSetNodeId{c.node};
         } else if constexpr (std::is_same_v<T, LssConfigureBitrate>) {
@@ -90,15 +85,15 @@ std::optional<core::Command> command_of(const LssCommand& cmd) {
 
 std::string answer(std::uint32_t seq, const LssCommand& cmd, const core::Result& result) {
   if (const auto* p = std::get_if<core::Problem>(&result)) return problem_text(seq, *p);
-  if (const auto* f = std::get_if<core::LssFound>(&result)) return lss_identity_response(seq, identity_of(f->address));
+  if (const auto* f = std::get_if<core::LssFound>(&result)) return lss_identity_response(seq, f->address);
   if (const auto* q = std::get_if<core::LssInquired>(&result)) {
     if (std::holds_alternative<LssGetNode>(cmd)) return lss_node_response(seq, static_cast<std::uint8_t>(q->value));
-    if (!q->what) return lss_identity_response(seq, identity_of(q->address));
+    if (!q->what) return lss_identity_response(seq, q->address);
     return lss_word_response(seq, q->value);
   }
   if (const auto* a = std::get_if<core::LssAssigned>(&result)) {
     std::string text;
-    for (const auto& as : a->assignments) text += lss_assigned_line(as.node_id, identity_of(as.address));
+    for (const auto& as : a->assignments) text += lss_assigned_line(as.node_id, as.address);
     return text + lss_allnodes_finished(seq, static_cast<unsigned>(a->assignments.size()));
   }
   return ok_response(seq);

@@ -9,7 +9,6 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <charconv>
 #include <cstdlib>
 #include <filesystem>
@@ -210,7 +209,7 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
 void parse_lss(const At& a, NetworkConfig& net) {
   a.expect_map({"assign"});
   std::set<int> ids;
-  std::set<std::array<std::uint32_t, 4>> addresses;
+  std::set<canopen::lss::Identity> addresses;
   for (const auto& item : a.get("assign") ? a.get("assign")->items() : std::vector<At>{}) {
     item.expect_map({"identity", "node-id", "store"});
     auto identity = item.get("identity");
@@ -222,16 +221,16 @@ void parse_lss(const At& a, NetworkConfig& net) {
       if (!v) identity->fail(std::string("missing key '") + key + "' (all four LSS address parts are needed)");
       return static_cast<std::uint32_t>(v->integer(0, 0xFFFFFFFF));
     };
-    e.vendor_id = word("vendor-id");
-    e.product_code = word("product-code");
-    e.revision = word("revision");
-    e.serial = word("serial");
+    e.identity.vendor_id = word("vendor-id");
+    e.identity.product_code = word("product-code");
+    e.identity.revision = word("revision");
+    e.identity.serial = word("serial");
     auto id = item.get("node-id");
     if (!id) item.fail("missing key 'node-id' (1..127)");
     e.node_id = static_cast<std::uint8_t>(id->integer(1, 127));
     if (e.node_id == net.node_id) id->fail("node " + std::to_string(e.node_id) + " is the gateway's own node-ID");
     if (!ids.insert(e.node_id).second) id->fail("node-ID " + std::to_string(e.node_id) + " is assigned twice");
-    if (!addresses.insert({e.vendor_id, e.product_code, e.revision, e.serial}).second)
+    if (!addresses.insert(e.identity).second)
       identity->fail("this LSS address is listed twice");
     if (auto v = item.get("store")) e.store = v->boolean();
     net.lss_assign.push_back(e);

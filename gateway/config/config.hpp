@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "canopen/lss/frames.hpp"
 #include "cli.hpp"
 #include "http/http_config.hpp"
 #include "mqtt/mqtt_config.hpp"
@@ -93,10 +94,7 @@ struct SimulationConfig {
 // master"): selected by its LSS address (1018h sub 1..4), configured with
 // `node_id`, stored when `store`.
 struct LssAssignConfig {
-  std::uint32_t vendor_id = 0;
-  std::uint32_t product_code = 0;
-  std::uint32_t revision = 0;
-  std::uint32_t serial = 0;
+  canopen::lss::Identity identity;
   std::uint8_t node_id = 0;
   bool store = true;
 };

@@ -346,8 +346,8 @@ TEST(AppDemo, LssAssignFromTheConfigurationAtStartUp) {
     Config c = merge(Config{}, cli);
     c.state_dir.clear();
     // The demo's new device: the I/O module's 1018h (sub 4 made unique by the simulator).
-    c.networks[0].lss_assign = {LssAssignConfig{0x5A1, 0x8822, 0x10003, 0x55000001, 33, true},
-                                LssAssignConfig{1, 2, 3, 4, 34, true}};
+    c.networks[0].lss_assign = {LssAssignConfig{{0x5A1, 0x8822, 0x10003, 0x55000001}, 33, true},
+                                LssAssignConfig{{1, 2, 3, 4}, 34, true}};
     boost::asio::io_context io;
     Logger log(LogLevel::Info, f);
     App app(io, c, log);

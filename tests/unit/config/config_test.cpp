@@ -261,10 +261,10 @@ TEST(Config, LssAssignPerNetwork) {
   const Config c = parse_config(yaml, "gw.yaml");
   ASSERT_EQ(c.networks[0].lss_assign.size(), 2u);
   const auto& a = c.networks[0].lss_assign[0];
-  EXPECT_EQ(a.vendor_id, 0x12345678u);
-  EXPECT_EQ(a.product_code, 2u);
-  EXPECT_EQ(a.revision, 3u);
-  EXPECT_EQ(a.serial, 0xFFFFFFFFu);
+  EXPECT_EQ(a.identity.vendor_id, 0x12345678u);
+  EXPECT_EQ(a.identity.product_code, 2u);
+  EXPECT_EQ(a.identity.revision, 3u);
+  EXPECT_EQ(a.identity.serial, 0xFFFFFFFFu);
   EXPECT_EQ(a.node_id, 42);
   EXPECT_TRUE(a.store) << "stored unless told otherwise";
   EXPECT_FALSE(c.networks[0].lss_assign[1].store);
