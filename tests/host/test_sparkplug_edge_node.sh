@@ -45,23 +45,6 @@ CHECK_PID=$!
 wait_for_file() { i=0; until [ -e "$1" ]; do [ $i -lt 100 ] || fail "$2"; sleep 0.1; i=$((i + 1)); done; }
 wait_for_file "$T/check.ready" "the checker did not subscribe: $(cat "$T/check-live.log")"
 
-# sp_wait SECONDS WHAT CHECKER-ARGS...: until the capture meets the
-# expectations; fails at once when a rule is broken (checker status 1).
-sp_wait() {
-  limit=$1 what=$2
-  shift 2
-  i=0
-  while :; do
-    rc=0
-    $CHECK --capture "$CAP" "$@" > "$T/check.out" 2>&1 || rc=$?
-    [ $rc -eq 0 ] && return 0
-    [ $rc -eq 2 ] || fail "$what: $(grep -E '"violation"|sparkplug_check' "$T/check.out" | head -8)"
-    [ $i -lt $((limit * 4)) ] || fail "$what: timed out: $(tail -n 1 "$T/check.out")"
-    sleep 0.25
-    i=$((i + 1))
-  done
-}
-lines() { wc -l < "$CAP"; }
 # summary FIELD: a field of the summary of the latest sp_wait, as JSON.
 summary() { /usr/bin/python3 -c 'import json,sys; print(json.dumps([json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")][-1][sys.argv[2]]))' "$T/check.out" "$1"; }
 each_dbirth() { for d in $DEVICES; do printf -- '--expect-dbirth %s ' "$d"; done; }

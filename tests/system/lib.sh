@@ -136,3 +136,25 @@ start_sim() {
 # json_field FILE TOPIC_REGEX: payloads (after the topic) of matching lines
 # of a `mosquitto_sub -v` log.
 payloads() { grep -E "^$2 " "$1" | cut -d' ' -f2-; }
+
+# Sparkplug tests (tests/tools/sparkplug_check.py on a capture file):
+# sp_wait SECONDS WHAT CHECKER-ARGS...: until the capture $CAP meets the
+# expectations (the checker run as $CHECK); fails at once when a rule is
+# broken (checker status 1). Polls SP_POLL_PER_S times a second (default 4).
+sp_wait() {
+  limit=$1 what=$2
+  shift 2
+  per_s=${SP_POLL_PER_S:-4}
+  i=0
+  while :; do
+    rc=0
+    $CHECK --capture "$CAP" "$@" > "$T/check.out" 2>&1 || rc=$?
+    [ $rc -eq 0 ] && return 0
+    [ $rc -eq 2 ] || fail "$what: $(grep -E '"violation"|sparkplug_check' "$T/check.out" | head -8)"
+    [ $i -lt $((limit * per_s)) ] || fail "$what: timed out: $(tail -n 1 "$T/check.out")"
+    sleep "$(awk "BEGIN { print 1 / $per_s }")"
+    i=$((i + 1))
+  done
+}
+# Lines in the capture so far (a later sp_wait can start after them).
+lines() { wc -l < "$CAP"; }

@@ -16,6 +16,7 @@
 #  5. the device back: DBIRTH again, DDATA again.
 # uml-run: --timeout 200
 . "$(dirname "$0")/lib.sh"
+SP_POLL_PER_S=2  # python starts slowly in UML
 TOOLS=${SOURCE_DIR:-$(dirname "$0")/../..}/tests/tools
 CHECK="/usr/bin/python3 $TOOLS/sparkplug_check.py"
 GROUP=plant
@@ -34,23 +35,6 @@ until [ -e "$T/check.ready" ]; do
   i=$((i + 1))
 done
 
-# sp_wait SECONDS WHAT CHECKER-ARGS...: until the capture meets the
-# expectations; fails at once when a rule is broken (checker status 1).
-sp_wait() {
-  limit=$1 what=$2
-  shift 2
-  i=0
-  while :; do
-    rc=0
-    $CHECK --capture "$CAP" "$@" > "$T/check.out" 2>&1 || rc=$?
-    [ $rc -eq 0 ] && return 0
-    [ $rc -eq 2 ] || fail "$what: $(grep -E '"violation"|sparkplug_check' "$T/check.out" | head -8)"
-    [ $i -lt $((limit * 2)) ] || fail "$what: timed out: $(tail -n 1 "$T/check.out")"
-    sleep 0.5
-    i=$((i + 1))
-  done
-}
-lines() { wc -l < "$CAP"; }
 
 cat > "$T/gw.yaml" <<YAML
 gateway: {id: $GW, state-dir: $T/state}
