@@ -20,6 +20,7 @@
 
 #include <chrono>
 #include <condition_variable>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -38,6 +39,21 @@ using namespace std::chrono_literals;
 constexpr const char* kMosquitto = "/usr/sbin/mosquitto";
 
 inline bool have_mosquitto() { return ::access(kMosquitto, X_OK) == 0; }
+
+// A broker that takes only TLS and a password (the TLS tests): writes
+// cert.pem/key.pem (self-signed for 127.0.0.1, made with openssl) and a
+// mosquitto password file with `user` in `dir`, and returns the
+// mosquitto.conf lines that use them (Broker::extra_conf). "" when openssl
+// or mosquitto_passwd failed.
+inline std::string tls_password_conf(const std::string& dir, const std::string& user, const std::string& password) {
+  const std::string mk = "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 1 "
+                         "-subj /CN=127.0.0.1 -addext subjectAltName=IP:127.0.0.1 -keyout " + dir +
+                         "/key.pem -out " + dir + "/cert.pem > /dev/null 2>&1 && "
+                         "chmod 644 " + dir + "/key.pem && "
+                         "mosquitto_passwd -b -c " + dir + "/passwd " + user + " " + password + " > /dev/null 2>&1";
+  if (std::system(mk.c_str()) != 0) return {};
+  return "certfile " + dir + "/cert.pem\nkeyfile " + dir + "/key.pem\npassword_file " + dir + "/passwd\n";
+}
 
 class TempDir {
  public:

@@ -19,15 +19,9 @@ class MqttTlsTest : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!have_mosquitto()) GTEST_SKIP() << "no " << kMosquitto;
-    const auto d = dir_.path().string();
-    const std::string mk = "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 1 "
-                           "-subj /CN=127.0.0.1 -addext subjectAltName=IP:127.0.0.1 -keyout " + d +
-                           "/key.pem -out " + d + "/cert.pem > /dev/null 2>&1 && "
-                           "chmod 644 " + d + "/key.pem && "
-                           "mosquitto_passwd -b -c " + d + "/passwd gateway s3cret > /dev/null 2>&1";
-    ASSERT_EQ(std::system(mk.c_str()), 0) << mk;
+    broker_.extra_conf = tls_password_conf(dir_.path().string(), "gateway", "s3cret");
+    ASSERT_FALSE(broker_.extra_conf.empty()) << "openssl or mosquitto_passwd failed";
     broker_.allow_anonymous = false;
-    broker_.extra_conf = "certfile " + d + "/cert.pem\nkeyfile " + d + "/key.pem\npassword_file " + d + "/passwd\n";
     ASSERT_TRUE(broker_.start()) << broker_.log();
   }
   void TearDown() override {

@@ -20,16 +20,10 @@ class EdgeClientTlsTest : public ::testing::Test {
  protected:
   void SetUp() override {
     if (!mqtt_test::have_mosquitto()) GTEST_SKIP() << "no mosquitto";
-    const auto d = dir.path().string();
-    const std::string mk = "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes -days 1 "
-                           "-subj /CN=127.0.0.1 -addext subjectAltName=IP:127.0.0.1 -keyout " + d +
-                           "/key.pem -out " + d + "/cert.pem > /dev/null 2>&1 && "
-                           "chmod 644 " + d + "/key.pem && "
-                           "mosquitto_passwd -b -c " + d + "/passwd edge s3cret > /dev/null 2>&1";
-    ASSERT_EQ(std::system(mk.c_str()), 0) << mk;
+    const auto conf = mqtt_test::tls_password_conf(dir.path().string(), "edge", "s3cret");
+    ASSERT_FALSE(conf.empty()) << "openssl or mosquitto_passwd failed";
     broker.allow_anonymous = false;
-    broker.extra_conf = "certfile " + d + "/cert.pem\nkeyfile " + d + "/key.pem\npassword_file " + d +
-                        "/passwd\nlog_type all\n";
+    broker.extra_conf = conf + "log_type all\n";
     ASSERT_TRUE(broker.start()) << broker.log();
   }
   void TearDown() override { io.call([&] { client.reset(); }); }
