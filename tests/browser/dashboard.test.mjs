@@ -561,6 +561,22 @@ async function freePort() {
   });
 }
 
+// Until something accepts on the port: the gateway's first CONNECT must not
+// race mosquitto's start-up (a refused attempt uses up a bdSeq).
+async function waitPortOpen(port, timeoutMs = 10_000) {
+  const deadline = Date.now() + timeoutMs;
+  for (;;) {
+    const ok = await new Promise((resolve) => {
+      const s = net.connect(port, '127.0.0.1');
+      s.once('connect', () => { s.destroy(); resolve(true); });
+      s.once('error', () => resolve(false));
+    });
+    if (ok) return;
+    if (Date.now() > deadline) throw new Error(`nothing listens on 127.0.0.1:${port} after ${timeoutMs} ms`);
+    await new Promise((r) => setTimeout(r, 50));
+  }
+}
+
 // The Sparkplug edge node's state is shown next to the bus and the event
 // stream: online once born on a real broker, offline (an alarm: SCADA sees
 // the gateway dead) when the broker is gone.
@@ -570,6 +586,7 @@ async function partSparkplug() {
   const port = await freePort();
   const broker = spawn(mosquitto, ['-p', String(port)], { stdio: 'ignore' });
   try {
+    await waitPortOpen(port);
     const g = await startGateway('gateway-sparkplug', [
       'gateway: { state-dir: "@STATE@" }',
       `http: { listen: "127.0.0.1:0", web-root: "${WEB_ROOT}" }`,
