@@ -5,8 +5,9 @@
 namespace gateway {
 
 namespace {
-constexpr std::array<std::string_view, 10> kNames = {"status", "bus", "state", "heartbeat", "emcy",
-                                                     "tpdo",   "pdo", "sync",  "time",      "boot"};
+constexpr std::array<std::string_view, 11> kNames = {"status", "bus",  "state", "heartbeat", "emcy",    "tpdo",
+                                                     "pdo",    "sync", "time",  "boot",      "transfer"};
+static_assert(kNames.size() == static_cast<std::size_t>(kLastEventKind) + 1);
 }
 
 std::string_view to_string(EventKind k) { return kNames[static_cast<std::size_t>(k)]; }

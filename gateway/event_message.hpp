@@ -25,9 +25,11 @@ enum class EventKind : std::uint8_t {
   Sync,          // canopen/<gw>/<net>/sync
   Time,          // canopen/<gw>/<net>/time
   BootConfig,    // canopen/<gw>/<net>/<node>/boot
+  Transfer,      // canopen/<gw>/<net>/<node>/transfer
 };
+inline constexpr EventKind kLastEventKind = EventKind::Transfer;
 
-// "status" "bus" "state" "heartbeat" "emcy" "tpdo" "pdo" "sync" "time" "boot"
+// "status" "bus" "state" "heartbeat" "emcy" "tpdo" "pdo" "sync" "time" "boot" "transfer"
 std::string_view to_string(EventKind k);
 // Inverse of to_string; false when unknown.
 bool event_kind_from_string(std::string_view s, EventKind& out);

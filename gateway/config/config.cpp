@@ -565,7 +565,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
       for (const auto& kv : map.node()) {
         const auto key = kv.first.as<std::string>();
         if (key != "default") continue;
-        for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k)
+        for (int k = 0; k <= static_cast<int>(kLastEventKind); ++k)
           set(static_cast<EventKind>(k), At(kv.second, map.path() + "." + key, file));
       }
       for (const auto& kv : map.node()) {

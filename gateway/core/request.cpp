@@ -66,6 +66,16 @@ Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt) {
                  : Role::Operator;
     case Operation::lss:
       return Role::Admin;  // contract "LSS master (CiA 305), REST (role admin)"
+    // contract "Remote configuration and maintenance (role admin unless noted)"
+    case Operation::config_read:
+    case Operation::dcf_read:
+      return Role::Viewer;
+    case Operation::store:
+      return Role::Operator;
+    case Operation::config_write:
+    case Operation::dcf_write:
+    case Operation::program:
+      return Role::Admin;
     case Operation::sdo_write:
     case Operation::rpdo_write:
     case Operation::sync:
@@ -84,6 +94,13 @@ struct RoleOf {
   Role operator()(const Sync&) const { return required_role(Operation::sync); }
   Role operator()(const PdoConfigRead&) const { return required_role(Operation::pdo_config_read); }
   Role operator()(const Undecodable& u) const { return required_role(u.operation); }
+  Role operator()(const NodeConfigRead&) const { return required_role(Operation::config_read); }
+  Role operator()(const NodeConfigWrite&) const { return required_role(Operation::config_write); }
+  Role operator()(const NodeEdsWrite&) const { return required_role(Operation::config_write); }
+  Role operator()(const DcfRead&) const { return required_role(Operation::dcf_read); }
+  Role operator()(const DcfApply&) const { return required_role(Operation::dcf_write); }
+  Role operator()(const NodeStore&) const { return required_role(Operation::store); }
+  Role operator()(const ProgramDownload&) const { return required_role(Operation::program); }
   Role operator()(const auto&) const { return required_role(Operation::lss); }  // the LSS commands
 };
 }  // namespace

@@ -46,7 +46,11 @@ struct Caller {
 };
 
 // The operations, for roles and for requests that could not be decoded.
-enum class Operation : std::uint8_t { sdo_read, sdo_write, nmt, rpdo_write, sync, pdo_config_read, lss };
+enum class Operation : std::uint8_t {
+  sdo_read, sdo_write, nmt, rpdo_write, sync, pdo_config_read, lss,
+  // Remote configuration and maintenance (contract section of that name).
+  config_read, config_write, dcf_read, dcf_write, store, program
+};
 
 // SDO upload of index/sub from `node` (the gateway's own node-ID: its own
 // dictionary answers). type: as asked, else the node's EDS/DCF entry's, else
@@ -184,9 +188,58 @@ struct LssInquire {
   std::optional<LssInquiry> what;
 };
 
+// ---- Remote configuration and maintenance -----------------------------------
+// Contract "Remote configuration and maintenance". Roles: reading the
+// configuration and a DCF read-back viewer; store/restore operator; the
+// rest admin (required_role).
+
+// The node's settings (one `nodes:` entry of the YAML) and where they come from.
+struct NodeConfigRead {
+  std::uint8_t node = 0;
+};
+// New settings for the node: the keys of one YAML `nodes:` entry, as JSON
+// (JSON is YAML); validated exactly as the YAML file is, applied at once
+// and kept in state-dir. Nothing changes on error (400 with the reason).
+struct NodeConfigWrite {
+  std::uint8_t node = 0;
+  boost::json::value settings;
+};
+// An EDS or DCF file for the node: checked like `canopen-eds check` (400
+// with "FILE:LINE: reason"), then used at once and kept in state-dir.
+struct NodeEdsWrite {
+  std::uint8_t node = 0;
+  std::string text;
+  std::string file_name;  // for messages and the kept copy ("" = "node<N>.eds")
+};
+// Reads the node's configurable objects by SDO; answers a DCF of their values.
+struct DcfRead {
+  std::uint8_t node = 0;
+};
+// Writes a DCF's values to the node in the boot-up configurator's order,
+// one result per object; then optionally store (1010h sub 1) and reset node.
+struct DcfApply {
+  std::uint8_t node = 0;
+  std::string text;
+  bool store = false;
+  bool reset = false;
+};
+// 1010h sub 1 "save" (store) / 1011h sub 1 "load" then NMT reset node (restore).
+struct NodeStore {
+  std::uint8_t node = 0;
+  bool restore = false;
+};
+// CiA 302-3 program download of `image` to 1F50h sub `program`.
+struct ProgramDownload {
+  std::uint8_t node = 0;
+  std::uint8_t program = 1;
+  canopen::Bytes image;
+};
+
 using Command = std::variant<SdoRead, SdoWrite, Nmt, RpdoWrite, Sync, PdoConfigRead, LssFastscan, LssConfigure,
                              LssAssignAll, LssDevices, LssSwitchGlobal, LssSwitchSelective, LssSetNodeId,
-                             LssSetBitTiming, LssActivateBitTiming, LssStore, LssInquire, Undecodable>;
+                             LssSetBitTiming, LssActivateBitTiming, LssStore, LssInquire, Undecodable,
+                             NodeConfigRead, NodeConfigWrite, NodeEdsWrite, DcfRead, DcfApply, NodeStore,
+                             ProgramDownload>;
 
 struct Request {
   Caller caller;
@@ -267,6 +320,54 @@ struct LssInquired {
   LssAddress address;
 };
 
+// Remote configuration results.
+// The node's settings as the YAML keys (JSON) and where they come from:
+// "state-dir" (changed at run time), "config" (the YAML file or flags),
+// "none" (not configured).
+struct NodeConfigView {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  boost::json::value settings;
+  std::string source;
+};
+// One object of a DCF read-back or apply that did not go through.
+struct ObjectOutcome {
+  std::uint16_t index = 0;
+  std::uint8_t sub = 0;
+  std::error_code error;  // empty: written / read
+  std::string detail;
+};
+// DcfRead: the DCF text; the objects that aborted are listed in `failed`.
+struct DcfDocument {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  std::string text;
+  std::size_t objects = 0;  // read successfully
+  std::vector<ObjectOutcome> failed;
+};
+// DcfApply: one outcome per object written, in the order written.
+struct DcfApplied {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  std::vector<ObjectOutcome> objects;
+  bool stored = false;
+  bool reset = false;
+};
+// NodeStore.
+struct NodeStored {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  bool restore = false;
+};
+// ProgramDownload: done and started; identification = 1F56h sub n when the device has it.
+struct ProgramDownloaded {
+  std::uint32_t network = 0;
+  std::uint8_t node = 0;
+  std::uint8_t program = 1;
+  std::size_t bytes = 0;
+  std::optional<std::uint32_t> identification;
+};
+
 // What a device said when it refused an LSS service (CiA 305 error codes).
 enum class LssError : std::uint8_t {
   manufacturer,           // error code FFh: manufacturer-specific (see the detail)
@@ -294,7 +395,8 @@ struct Problem {
 };
 
 using Result = std::variant<SdoValue, NmtSent, RpdoSent, SyncSent, PdoConfigReport, LssDone, LssFound, LssAssigned,
-                            LssDeviceList, LssInquired, Problem>;
+                            LssDeviceList, LssInquired, NodeConfigView, DcfDocument, DcfApplied, NodeStored,
+                            ProgramDownloaded, Problem>;
 
 // A failed SDO transfer or dictionary access as a Problem: remote (the
 // device, or the own dictionary, refused) 422 "SDO abort"; a local timeout
@@ -312,7 +414,9 @@ std::string problem_json(const Problem& p, std::string_view correlation_id = {})
 
 // The role a command needs: SDO read viewer; SDO write, RPDO write, SYNC,
 // PDO configuration read and NMT start/stop/pre-operational operator; NMT
-// reset node / reset communication and every LSS command admin.
+// reset node / reset communication and every LSS command admin; node
+// configuration and DCF read viewer, store/restore operator, configuration
+// and EDS writes, DCF apply and program download admin.
 Role required_role(const Command& command);
 Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt = std::nullopt);
 

@@ -49,6 +49,13 @@ struct OperationOf {
   Operation operator()(const Sync&) const { return Operation::sync; }
   Operation operator()(const PdoConfigRead&) const { return Operation::pdo_config_read; }
   Operation operator()(const Undecodable& u) const { return u.operation; }
+  Operation operator()(const NodeConfigRead&) const { return Operation::config_read; }
+  Operation operator()(const NodeConfigWrite&) const { return Operation::config_write; }
+  Operation operator()(const NodeEdsWrite&) const { return Operation::config_write; }
+  Operation operator()(const DcfRead&) const { return Operation::dcf_read; }
+  Operation operator()(const DcfApply&) const { return Operation::dcf_write; }
+  Operation operator()(const NodeStore&) const { return Operation::store; }
+  Operation operator()(const ProgramDownload&) const { return Operation::program; }
   Operation operator()(const auto&) const { return Operation::lss; }  // the LSS commands
 };
 
@@ -64,6 +71,12 @@ std::string_view operation_text(Operation op) {
     case Operation::sync: return "SYNC";
     case Operation::pdo_config_read: return "PDO configuration read";
     case Operation::lss: return "LSS";
+    case Operation::config_read: return "configuration read";
+    case Operation::config_write: return "configuration change";
+    case Operation::dcf_read: return "DCF read";
+    case Operation::dcf_write: return "DCF apply";
+    case Operation::store: return "store/restore";
+    case Operation::program: return "program download";
   }
   return "request";
 }
@@ -172,6 +185,11 @@ void RequestCore::execute(Request request, Done done) {
         else if constexpr (std::is_same_v<T, Sync>) sync(c, cmd);
         else if constexpr (std::is_same_v<T, PdoConfigRead>) pdo_config_read(c, cmd);
         else if constexpr (std::is_same_v<T, Undecodable>) {}  // answered above
+        else if constexpr (std::is_same_v<T, NodeConfigRead> || std::is_same_v<T, NodeConfigWrite> ||
+                           std::is_same_v<T, NodeEdsWrite> || std::is_same_v<T, DcfRead> ||
+                           std::is_same_v<T, DcfApply> || std::is_same_v<T, NodeStore> ||
+                           std::is_same_v<T, ProgramDownload>)
+          c.done(problem(501, "not implemented yet (issue 17 in progress)"));
         else lss(c, command);  // the LSS commands
       },
       command);

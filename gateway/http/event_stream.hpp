@@ -26,7 +26,7 @@ namespace gateway::http {
 // - nodes: integers 0..127 (0 = events not about one node: bus, sync, time,
 //   unclaimed pdo);
 // - kinds: names of EventKind ("status" "bus" "state" "heartbeat" "emcy"
-//   "tpdo" "pdo" "sync" "time" "boot");
+//   "tpdo" "pdo" "sync" "time" "boot" "transfer");
 // - an event passes when it passes every dimension;
 // - unknown keys, wrong types, values out of range or unknown kinds refuse
 //   the whole message (the previous filter stays);

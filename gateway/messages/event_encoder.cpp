@@ -47,6 +47,26 @@ std::string_view step_name(canopen::BootConfigEvent::Step s) {
   return "unknown";
 }
 
+std::string_view transfer_operation_name(canopen::TransferEvent::Operation o) {
+  using O = canopen::TransferEvent::Operation;
+  switch (o) {
+    case O::ProgramDownload: return "program-download";
+    case O::DcfRead: return "dcf-read";
+    case O::DcfApply: return "dcf-apply";
+  }
+  return "unknown";
+}
+
+std::string_view transfer_status_name(canopen::TransferEvent::Status s) {
+  using S = canopen::TransferEvent::Status;
+  switch (s) {
+    case S::Running: return "running";
+    case S::Done: return "done";
+    case S::Failed: return "failed";
+  }
+  return "unknown";
+}
+
 // Text that goes into a protobuf string field and JSON: always UTF-8.
 std::string utf8(std::string_view s) { return detail::to_utf8(s); }
 
@@ -339,6 +359,38 @@ class Encoder {
     std::string& j = e->json;
     h_.json(j);
     field(j, "step", m.step());
+    if (m.has_error()) field(j, "error", m.error());
+    if (m.has_abort_code()) field(j, "abortCode", m.abort_code());
+    field(j, "detail", m.detail());
+    j += '}';
+    finish(*e, m);
+    return e;
+  }
+
+  EncodedEventPtr operator()(const canopen::TransferEvent& t) {
+    h_.node = t.node;
+    auto e = make(EventKind::Transfer, h_, node_topic(ctx_, h_.network, t.node, "transfer"), false);
+    pb::TransferEvent m;
+    h_.set(m);
+    m.set_operation(std::string(transfer_operation_name(t.operation)));
+    m.set_status(std::string(transfer_status_name(t.status)));
+    m.set_done(t.done);
+    m.set_total(t.total);
+    m.set_unit(t.operation == canopen::TransferEvent::Operation::ProgramDownload ? "bytes" : "objects");
+    if (t.error) {
+      m.set_error(utf8(t.error.message()));
+      if (t.error.category() == canopen::sdo_abort_category()) {
+        m.set_abort_code(detail::abort_code_text(static_cast<std::uint32_t>(t.error.value())));
+      }
+    }
+    m.set_detail(utf8(t.detail));
+    std::string& j = e->json;
+    h_.json(j);
+    field(j, "operation", m.operation());
+    field(j, "status", m.status());
+    field_u64(j, "done", t.done);  // proto3 JSON: uint64 as a string
+    field_u64(j, "total", t.total);
+    field(j, "unit", m.unit());
     if (m.has_error()) field(j, "error", m.error());
     if (m.has_abort_code()) field(j, "abortCode", m.abort_code());
     field(j, "detail", m.detail());

@@ -16,6 +16,7 @@
 //   canopen/<gw>/<net>/sync                            SyncEvent
 //   canopen/<gw>/<net>/time                            TimeEvent
 //   canopen/<gw>/<net>/<node>/boot                     BootConfigEvent
+//   canopen/<gw>/<net>/<node>/transfer                 TransferEvent
 //
 // JSON equals, by value, what google::protobuf::util::MessageToJsonString
 // prints for the same message with always_print_primitive_fields = true and

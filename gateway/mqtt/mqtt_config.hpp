@@ -26,7 +26,7 @@ enum class PayloadFormat : std::uint8_t { Json, Protobuf };
 // is not), memory (never on storage).
 enum class StorageMode : std::uint8_t { Disk, Outage, Memory };
 
-constexpr std::size_t kEventKindCount = 10;  // EventKind values
+constexpr std::size_t kEventKindCount = static_cast<std::size_t>(kLastEventKind) + 1;  // EventKind values
 
 // One value per EventKind, indexed by the kind or its number.
 template <class T>
@@ -36,10 +36,10 @@ struct PerKind : std::array<T, kEventKindCount> {
   const T& operator[](EventKind k) const { return (*this)[static_cast<std::size_t>(k)]; }
 };
 
-// Default QoS per EventKind: 1 for status, bus, state, emcy and boot (state
-// a subscriber must not miss), 0 for the high-rate heartbeat, tpdo, pdo,
+// Default QoS per EventKind: 1 for status, bus, state, emcy, boot and
+// transfer (state a subscriber must not miss), 0 for the high-rate heartbeat, tpdo, pdo,
 // sync and time.
-constexpr PerKind<std::uint8_t> kDefaultQos = {{1, 1, 1, 0, 1, 0, 0, 0, 0, 1}};
+constexpr PerKind<std::uint8_t> kDefaultQos = {{1, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1}};
 
 struct MqttConfig {
   std::string server_uri;   // tcp:// ssl:// mqtt:// mqtts:// (host[:port])

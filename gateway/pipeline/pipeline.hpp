@@ -51,7 +51,7 @@ class EventPipeline {
   std::vector<EncodedEventPtr> ring_;
   std::size_t ring_next_ = 0;
   std::uint64_t total_ = 0;
-  std::array<std::uint64_t, 10> published_{};
+  std::array<std::uint64_t, static_cast<std::size_t>(kLastEventKind) + 1> published_{};
 };
 
 }  // namespace gateway

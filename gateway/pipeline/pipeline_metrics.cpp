@@ -11,7 +11,7 @@ namespace gateway {
 void register_metrics(metrics::Registry& r, const EventPipeline& pipeline) {
   metrics::register_events_by_kind(r, [&pipeline] {
     std::map<std::string, std::uint64_t> by_kind;
-    for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k) {
+    for (int k = 0; k <= static_cast<int>(kLastEventKind); ++k) {
       const auto kind = static_cast<EventKind>(k);
       by_kind[std::string(to_string(kind))] = pipeline.published(kind);
     }

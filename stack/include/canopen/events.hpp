@@ -118,8 +118,26 @@ struct BootConfigEvent {
   std::optional<DeviceIdentity> identity;  // CheckIdentity: what the device answered
 };
 
+// Progress and result of a long transfer to or from one node (contract
+// "Remote configuration and maintenance", events of kind `transfer`): a
+// program download (CiA 302-3, 1F50h) counts bytes, a DCF read-back or
+// apply counts objects. Running events report progress (at least at the
+// start and at the end of the data phase); exactly one Done or Failed ends
+// each transfer.
+struct TransferEvent {
+  enum class Operation : std::uint8_t { ProgramDownload, DcfRead, DcfApply };
+  enum class Status : std::uint8_t { Running, Done, Failed };
+  std::uint8_t node = 0;
+  Operation operation = Operation::ProgramDownload;
+  Status status = Status::Running;
+  std::uint64_t done = 0;   // bytes (ProgramDownload) or objects (DCF) so far
+  std::uint64_t total = 0;  // of as many
+  std::error_code error;    // Failed: the SDO abort or local error
+  std::string detail;       // the step ("clear program", "1F50h sub 1", ...) or why it failed
+};
+
 using EventBody = std::variant<NodeStateEvent, HeartbeatEvent, EmcyEvent, PdoEvent, SyncEvent, TimeEvent,
-                               BootConfigEvent, can::BusEvent>;
+                               BootConfigEvent, can::BusEvent, TransferEvent>;
 
 struct Event {
   std::uint64_t seq = 0;                         // per network, +1 per event

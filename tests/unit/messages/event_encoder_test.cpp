@@ -367,6 +367,40 @@ TEST(EncodeEvent, SyncAndTime) {
   EXPECT_EQ(parse_obj(e->json).at("time"), "2026-11-22T10:15:30.123Z");
 }
 
+// Contract "Remote configuration and maintenance": progress of a long
+// transfer as events of kind `transfer`, bytes done and total, then the result.
+TEST(EncodeEvent, TransferProgressThenResult) {
+  canopen::TransferEvent t;
+  t.node = 5;
+  t.operation = canopen::TransferEvent::Operation::ProgramDownload;
+  t.done = 4096;
+  t.total = 262144;
+  t.detail = "1F50h sub 1";
+  auto e = encode_event(event(t), 1, kCtx);
+  EXPECT_EQ(e->kind, EventKind::Transfer);
+  EXPECT_EQ(e->topic, "canopen/gw1/1/5/transfer");
+  EXPECT_FALSE(e->retained);
+  check_consistent<pb::TransferEvent>(*e);
+  auto j = parse_obj(e->json);
+  EXPECT_EQ(j.at("operation"), "program-download");
+  EXPECT_EQ(j.at("status"), "running");
+  EXPECT_EQ(j.at("done"), "4096");
+  EXPECT_EQ(j.at("total"), "262144");
+  EXPECT_EQ(j.at("unit"), "bytes");
+  EXPECT_FALSE(j.contains("error"));
+
+  t.operation = canopen::TransferEvent::Operation::DcfApply;
+  t.status = canopen::TransferEvent::Status::Failed;
+  t.error = canopen::make_error_code(canopen::SdoAbort::NoSuchObject);
+  e = encode_event(event(t), 1, kCtx);
+  check_consistent<pb::TransferEvent>(*e);
+  j = parse_obj(e->json);
+  EXPECT_EQ(j.at("operation"), "dcf-apply");
+  EXPECT_EQ(j.at("status"), "failed");
+  EXPECT_EQ(j.at("unit"), "objects");
+  EXPECT_EQ(j.at("abortCode"), "0x06020000");
+}
+
 TEST(EncodeEvent, BootConfig) {
   canopen::BootConfigEvent b;
   b.node = 5;

@@ -65,7 +65,7 @@ TEST(PipelineMetrics, NetworksAndEventsFollowTheChannelAndThePipeline) {
   two.network = 2;
   two.interface = "demo";  // a simulated network
   std::map<std::string, std::uint64_t> by_kind;
-  for (int k = 0; k <= static_cast<int>(EventKind::BootConfig); ++k)
+  for (int k = 0; k <= static_cast<int>(kLastEventKind); ++k)
     by_kind[std::string(to_string(static_cast<EventKind>(k)))] = 0;
   by_kind["state"] = 1;
   metrics::Registry same;
