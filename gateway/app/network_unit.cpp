@@ -117,6 +117,13 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
              std::string(canopen::to_string(now_state)));
     log.flush();
   };
+  // A reset communication of the own node returns 1016h to its power-on
+  // values (the start-up configuration): the consumers of nodes changed at
+  // run time are part of the gateway's configuration, so they come back.
+  dev_cb.on_reset_communication = [this] {
+    for (const auto& node : cfg.nodes)
+      if (overlay_files.contains(node.id)) set_consumer_entry(node);
+  };
   local = std::make_unique<canopen::LocalNode>(
       od, dev_cfg, [this](const Frame& f) { channel->send(f); },
       [this](const Frame& f) {

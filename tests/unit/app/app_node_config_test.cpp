@@ -270,6 +270,22 @@ TEST(AppNodeConfig, ABrokenKeptFileIsLoggedAndTheConfigurationsSettingsApply) {
   EXPECT_EQ(rig.app->cache().node(1, 20)->name, "added");
 }
 
+// CiA 301 7.3.2 / 7.5.2.33: a reset communication of the gateway's own node
+// returns 1016h to its power-on values; a consumer time changed at run time
+// is part of the gateway's configuration and comes back with them.
+TEST(AppNodeConfig, AConsumerChangedAtRunTimeSurvivesAResetCommunicationOfTheOwnNode) {
+  TempDir dir;
+  Rig rig(dir.path);
+  ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(rig.run(core::NodeConfigWrite{
+      10, body(R"x({"name": "io-rack-1", "eds": "(built in)", "heartbeat-consumer-ms": 1500})x"), false})));
+  ASSERT_TRUE(has_consumer(rig, 0x000A0000 | 1500));
+  ASSERT_TRUE(std::holds_alternative<core::NmtSent>(rig.run(core::Nmt{127, canopen::NmtCommand::ResetCommunication})));
+  rig.io.run_for(200ms);
+  EXPECT_TRUE(has_consumer(rig, 0x000A0000 | 1500));
+  EXPECT_FALSE(has_consumer(rig, 0x000A0000 | 2000));
+  EXPECT_TRUE(has_consumer(rig, 0x00050000 | 2000)) << "the others as configured";
+}
+
 // Without a state-dir a change would be gone at the next start: refused.
 TEST(AppNodeConfig, WithoutAStateDirAChangeIs409) {
   Rig rig(fs::path{});
