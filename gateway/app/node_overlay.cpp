@@ -57,7 +57,11 @@ std::map<std::uint8_t, std::string> apply_node_overlay(const std::string& state_
     const auto name = entry.path().filename().string();
     if (!name.starts_with(prefix) || entry.path().extension() != ".yaml") continue;
     const auto number = name.substr(prefix.size(), name.size() - prefix.size() - 5);
-    if (number.empty() || number.size() > 3 || !std::all_of(number.begin(), number.end(), ::isdigit)) continue;
+    const bool digits =
+        !number.empty() && number.size() <= 3 && std::all_of(number.begin(), number.end(), [](char c) {
+          return c >= '0' && c <= '9';
+        });
+    if (!digits) continue;
     const int id = std::stoi(number);
     const std::string file = entry.path().string();
     auto refuse = [&](const std::string& why) {
