@@ -1,5 +1,6 @@
 #include "app.hpp"
 
+#include <algorithm>
 #include <filesystem>
 
 #include "canopen/eds/eds.hpp"
@@ -13,6 +14,7 @@
 #include "event_encoder.hpp"
 #include "mqtt_output.hpp"
 #include "sparkplug/edge_client.hpp"
+#include "node_configs.hpp"
 #include "sparkplug_output.hpp"
 #include "pipeline_metrics.hpp"
 #include "seq_store.hpp"
@@ -210,6 +212,7 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
         return auth::TokenStore(std::move(t));
       }()),
       core_networks_(std::make_unique<CoreNetworks>(*this)),
+      node_configs_(std::make_unique<NodeConfigs>(*this)),
       core_(*core_networks_, tokens_,
             core::RequestCore::Settings{config_.mqtt.requests_role.value_or(Role::None), config_.http.rate_limit,
                                         config_.http.rate_burst, canopen::sdo::ClientConfig{}.queue_limit},
@@ -224,6 +227,7 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
           cache_),
       monitor_(std::move(networks.monitor)),
       nets_(std::move(networks.units)) {
+  core_.set_node_settings(node_configs_.get());
   for (auto& n : nets_) attach(*n);
   // Each component's families, once, in the order /metrics has always
   // written them (the HTTP server and the uptime follow, api_routes.cpp).
@@ -312,6 +316,19 @@ const canopen::eds::DeviceDescription* App::description(std::uint32_t net_number
 }
 
 std::string_view App::version() { return CANOPEN_GATEWAY_VERSION; }
+
+std::vector<App::NodeOrigin> App::node_origins(std::uint32_t net_number) const {
+  std::vector<NodeOrigin> out;
+  if (net_number == 0 || net_number > nets_.size()) return out;
+  const Net& n = *nets_[net_number - 1];
+  for (const auto& node : n.cfg.nodes) {
+    auto it = n.overlay_files.find(node.id);
+    if (it != n.overlay_files.end()) out.push_back({node.id, "state-dir", it->second});
+    else out.push_back({node.id, "config", {}});
+  }
+  std::sort(out.begin(), out.end(), [](const NodeOrigin& a, const NodeOrigin& b) { return a.node < b.node; });
+  return out;
+}
 
 const canopen::od::ObjectDictionary* App::own_dictionary(std::uint32_t net_number) const {
   if (net_number == 0 || net_number > nets_.size()) return nullptr;

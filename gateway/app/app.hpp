@@ -168,6 +168,17 @@ class App {
   // unknown or real network.
   canopen::sim::Simulator* simulator(std::uint32_t net);
 
+  // Where a configured node's settings come from (GET /api/v1/gateway):
+  // "config" (the configuration file or flags; the demo's own), or
+  // "state-dir" (changed at run time) with the file that holds them.
+  struct NodeOrigin {
+    std::uint8_t node = 0;
+    std::string source;
+    std::string file;
+  };
+  // The configured nodes of network `net` in node-ID order; empty for an unknown network.
+  std::vector<NodeOrigin> node_origins(std::uint32_t net) const;
+
   // The request counters and SDO latency histogram (GET /api/v1/gateway).
   using Counters = core::Counters;
   const Counters& counters() const { return core_.counters(); }
@@ -191,6 +202,9 @@ class App {
   void audit(const std::string& line);
   // The request core's view of the networks (core::Networks).
   struct CoreNetworks;
+  // Run-time node configuration for the request core (core::NodeSettings,
+  // node_config.cpp): applies to the units, keeps in state-dir.
+  struct NodeConfigs;
 
   boost::asio::io_context& io_;
   Config config_;
@@ -200,6 +214,7 @@ class App {
   // Declared before nets_: SDO transfers that end while the networks are
   // torn down still find the core.
   std::unique_ptr<CoreNetworks> core_networks_;
+  std::unique_ptr<NodeConfigs> node_configs_;
   core::RequestCore core_;
   EncodeContext encode_ctx_;
   std::function<bool()> protobuf_demand_;

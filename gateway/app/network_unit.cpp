@@ -117,6 +117,13 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
              std::string(canopen::to_string(now_state)));
     log.flush();
   };
+  // A reset communication of the own node returns 1016h to its power-on
+  // values (the start-up configuration): the consumers of nodes changed at
+  // run time are part of the gateway's configuration, so they come back.
+  dev_cb.on_reset_communication = [this] {
+    for (const auto& node : cfg.nodes)
+      if (overlay_files.contains(node.id)) set_consumer_entry(node);
+  };
   local = std::make_unique<canopen::LocalNode>(
       od, dev_cfg, [this](const Frame& f) { channel->send(f); },
       [this](const Frame& f) {
@@ -134,44 +141,7 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
         if (const auto* s = std::get_if<canopen::NodeStateEvent>(&ev.body)) local->on_node_state(*s, now());
         if (on_event) on_event(ev);
       });
-  for (const auto& node : cfg.nodes) {
-    auto it = descriptions.find(node.id);
-    if (it != descriptions.end()) {
-      for (const auto& problem : network->add_node(node.id, it->second.od))
-        log.warn(label + " node " + std::to_string(node.id) + " PDO: " + problem);
-    }
-    // heartbeat-consumer-ms auto: watched with the node's own 1017h (or a
-    // period learnt from its heartbeats); 0: not watched at all.
-    if (!node.heartbeat_consumer) {
-      network->nmt().set_auto_watch(
-          node.id, true,
-          it != descriptions.end() ? canopen::nmt::producer_heartbeat_time(it->second.od) : canopen::Duration::zero());
-    } else if (node.heartbeat_consumer->count() == 0) {
-      network->nmt().set_auto_watch(node.id, false);
-    }
-    if (node.guarding.guard_time.count() > 0) {
-      network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor, now());
-    }
-    // Reading the PDO configuration needs the description (types, names).
-    const bool read_pdo = it != descriptions.end() &&
-                          (node.boot && node.boot->read_pdo_config ? *node.boot->read_pdo_config : cfg.read_pdo_config);
-    if (node.boot) {
-      canopen::master::NodeBootConfig boot;
-      if (it != descriptions.end()) {
-        boot = canopen::master::boot_config_from_dcf(it->second);
-        if (!node.boot->configure) boot.dcf = nullptr;
-        if (!node.boot->check_identity) boot.device_type = boot.vendor_id = boot.product_code = boot.revision =
-            boot.serial = std::nullopt;
-      }
-      boot.start = node.boot->start;
-      network->configure_boot(node.id, boot, read_pdo);
-    } else if (read_pdo) {
-      // Only watched, but its PDOs are read at each boot-up: no checks, no DCF, no start.
-      canopen::master::NodeBootConfig watch_only;
-      watch_only.start = false;
-      network->configure_boot(node.id, watch_only, true);
-    }
-  }
+  for (const auto& node : cfg.nodes) set_up_node(node);
 
   driver = std::make_unique<canopen::socketcan::ServiceDriver>(io, *channel);
   driver->add(*local);
@@ -192,6 +162,104 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
     local->on_bus_event(ev, now());
     if (on_bus_event) on_bus_event(ev);
   });
+}
+
+void NetworkUnit::set_up_node(const NodeConfig& node) {
+  auto it = descriptions.find(node.id);
+  if (it != descriptions.end()) {
+    for (const auto& problem : network->add_node(node.id, it->second.od))
+      log.warn(label + " node " + std::to_string(node.id) + " PDO: " + problem);
+  }
+  // heartbeat-consumer-ms auto: watched with the node's own 1017h (or a
+  // period learnt from its heartbeats); 0: not watched at all.
+  if (!node.heartbeat_consumer) {
+    network->nmt().set_auto_watch(
+        node.id, true,
+        it != descriptions.end() ? canopen::nmt::producer_heartbeat_time(it->second.od) : canopen::Duration::zero());
+  } else if (node.heartbeat_consumer->count() == 0) {
+    network->nmt().set_auto_watch(node.id, false);
+  }
+  if (node.guarding.guard_time.count() > 0) {
+    network->nmt().set_node_guarding(node.id, node.guarding.guard_time, node.guarding.life_time_factor, now());
+  }
+  // Reading the PDO configuration needs the description (types, names).
+  const bool read_pdo = it != descriptions.end() &&
+                        (node.boot && node.boot->read_pdo_config ? *node.boot->read_pdo_config : cfg.read_pdo_config);
+  if (node.boot) {
+    canopen::master::NodeBootConfig boot;
+    if (it != descriptions.end()) {
+      boot = canopen::master::boot_config_from_dcf(it->second);
+      if (!node.boot->configure) boot.dcf = nullptr;
+      if (!node.boot->check_identity) boot.device_type = boot.vendor_id = boot.product_code = boot.revision =
+          boot.serial = std::nullopt;
+    }
+    boot.start = node.boot->start;
+    network->configure_boot(node.id, boot, read_pdo);
+  } else if (read_pdo) {
+    // Only watched, but its PDOs are read at each boot-up: no checks, no DCF, no start.
+    canopen::master::NodeBootConfig watch_only;
+    watch_only.start = false;
+    network->configure_boot(node.id, watch_only, true);
+  }
+}
+
+std::string NetworkUnit::cannot_apply(const NodeConfig& node) const {
+  if (node.id == cfg.node_id)
+    return "node " + std::to_string(node.id) + " is the gateway's own node-ID on " + label;
+  if (!consumed(node)) return {};
+  const auto& od = *own_od;
+  const auto entries = od.get_unsigned(0x1016, 0).value_or(0);
+  for (std::uint8_t sub = 1; sub <= entries; ++sub) {
+    const auto v = od.get_unsigned(0x1016, sub).value_or(0);
+    const auto id = (v >> 16) & 0xFF;
+    if (id == node.id || id == 0 || (v & 0xFFFF) == 0) return {};  // its own entry, or an unused one
+  }
+  return "heartbeat-consumer-ms: the gateway's 1016h has no free entry (" + std::to_string(entries) +
+         " in use); restart the gateway to have it sized for the configured nodes";
+}
+
+void NetworkUnit::set_consumer_entry(const NodeConfig& node) {
+  auto& od = *own_od;
+  const auto entries = od.get_unsigned(0x1016, 0).value_or(0);
+  std::uint8_t own = 0, free = 0;
+  for (std::uint8_t sub = 1; sub <= entries; ++sub) {
+    const auto v = od.get_unsigned(0x1016, sub).value_or(0);
+    const auto id = (v >> 16) & 0xFF;
+    if (id == node.id && own == 0) own = sub;
+    if ((id == 0 || (v & 0xFFFF) == 0) && free == 0) free = sub;
+  }
+  using canopen::DataType;
+  using canopen::Value;
+  std::uint64_t value = 0;
+  if (consumed(node)) value = std::uint64_t{node.id} << 16 | static_cast<std::uint64_t>(node.heartbeat_consumer->count());
+  const std::uint8_t sub = own != 0 ? own : value != 0 ? free : 0;
+  if (sub == 0) return;  // nothing to clear, or no room (cannot_apply() said so first)
+  // The 1016h observer reconfigures the consumers (Network::configure_heartbeat_consumers).
+  if (auto ec = od.write(0x1016, sub, canopen::encode(Value::of_unsigned(DataType::Unsigned32, value))))
+    log.warn(label + " node " + std::to_string(node.id) + ": 1016h sub " + std::to_string(sub) + ": " + ec.message());
+}
+
+void NetworkUnit::apply_node(const NodeConfig& node, std::optional<canopen::eds::DeviceDescription> description) {
+  const std::uint8_t id = node.id;
+  // What the node had goes: its description (kept alive, see
+  // retired_descriptions), decoding, RPDOs, boot-up configuration, guarding.
+  if (auto old = descriptions.extract(id)) retired_descriptions.push_back(std::move(old));
+  network->remove_node(id);
+  network->nmt().set_node_guarding(id, canopen::Duration::zero(), 0, now());
+  network->nmt().set_auto_watch(id, true);
+  if (description) descriptions.emplace(id, std::move(*description));
+  set_consumer_entry(node);
+  set_up_node(node);
+  auto it = std::find_if(cfg.nodes.begin(), cfg.nodes.end(), [id](const NodeConfig& n) { return n.id == id; });
+  if (it != cfg.nodes.end()) *it = node;
+  else cfg.nodes.push_back(node);
+}
+
+void NetworkUnit::remove_node(std::uint8_t id) {
+  NodeConfig none;
+  none.id = id;
+  apply_node(none, std::nullopt);  // nothing configured: watched as any node heard
+  std::erase_if(cfg.nodes, [id](const NodeConfig& n) { return n.id == id; });
 }
 
 NetworkUnit::~NetworkUnit() = default;

@@ -94,6 +94,15 @@ struct NetworkUnit {
   NetworkUnit(const NetworkUnit&) = delete;
   NetworkUnit& operator=(const NetworkUnit&) = delete;
 
+ private:
+  // Watching, guarding, decoding and boot-up configuration of one node as
+  // its settings say (the constructor's, and apply_node()'s after it).
+  void set_up_node(const NodeConfig& node);
+  // Writes node's 1016h entry (heartbeat-consumer-ms with a time), or clears it.
+  void set_consumer_entry(const NodeConfig& node);
+
+ public:
+
   // The time the unit gives the stack.
   static canopen::TimePoint now() { return canopen::SteadyClock::now(); }
 
@@ -107,6 +116,29 @@ struct NetworkUnit {
   std::unique_ptr<canopen::LocalNode> local;
   // std::map: stable addresses (the boot configurator keeps DCF pointers).
   std::map<std::uint8_t, canopen::eds::DeviceDescription> descriptions;
+  // Descriptions replaced at run time, kept at their addresses for the life
+  // of the unit: a boot-up sequence under way may still read its DCF.
+  std::vector<std::map<std::uint8_t, canopen::eds::DeviceDescription>::node_type> retired_descriptions;
+
+  // Run-time node configuration (issue 17; App's NodeSettings).
+  // The nodes as the configuration file (or the demo) gives them, before
+  // the state-dir overlay.
+  std::vector<NodeConfig> file_nodes;
+  // The nodes whose settings come from state-dir, and the file holding them.
+  std::map<std::uint8_t, std::string> overlay_files;
+  // Reads the EDS/DCF a node's settings name (its file, or the demo's built-in
+  // one); throws canopen::eds::EdsError. Set by the composition root.
+  std::function<canopen::eds::DeviceDescription(const NodeConfig&)> load_description;
+  // Why `node` cannot be applied on this network ("" = it can): the own
+  // node-ID, or no free 1016h entry for its heartbeat consumer.
+  std::string cannot_apply(const NodeConfig& node) const;
+  // Applies `node` at once, replacing what the node had (settings,
+  // description, decoding, watching, 1016h entry, boot-up configuration;
+  // the boot options act at its next boot-up). `description`: the node's
+  // EDS/DCF (nullopt: none). cannot_apply() MUST have said "".
+  void apply_node(const NodeConfig& node, std::optional<canopen::eds::DeviceDescription> description);
+  // Forgets a node that only run-time configuration had added.
+  void remove_node(std::uint8_t node);
   std::unique_ptr<canopen::Network> network;
   std::unique_ptr<canopen::socketcan::ServiceDriver> driver;
 

@@ -5,6 +5,7 @@ configure_file(${CMAKE_CURRENT_LIST_DIR}/demo_devices.cpp.in ${CMAKE_CURRENT_BIN
 add_library(gateway_app STATIC ${CMAKE_CURRENT_LIST_DIR}/app.cpp ${CMAKE_CURRENT_LIST_DIR}/seq_store.cpp
                                ${CMAKE_CURRENT_LIST_DIR}/network_unit.cpp ${CMAKE_CURRENT_LIST_DIR}/composition.cpp
                                ${CMAKE_CURRENT_LIST_DIR}/mqtt_output.cpp ${CMAKE_CURRENT_LIST_DIR}/sparkplug_output.cpp
+                               ${CMAKE_CURRENT_LIST_DIR}/node_overlay.cpp ${CMAKE_CURRENT_LIST_DIR}/node_config.cpp
                                ${CMAKE_CURRENT_BINARY_DIR}/demo_devices.cpp)
 target_include_directories(gateway_app PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_compile_definitions(gateway_app PRIVATE CANOPEN_GATEWAY_VERSION="${PROJECT_VERSION}")

@@ -240,6 +240,14 @@ void SparkplugOutput::on_event(std::uint32_t network, const canopen::Event& ev) 
   }
 }
 
+void SparkplugOutput::node_changed(std::uint32_t network, std::uint8_t node,
+                                   const std::vector<SparkplugObject>& listed) {
+  Device& d = device(network, node);
+  d.listed = listed;
+  if (d.phase == Device::Phase::Offline) return;  // born with its next boot-up or heartbeat
+  begin_birth(d);  // a new generation: answers of a birth under way are dropped
+}
+
 void SparkplugOutput::on_command(const sparkplug::WriteCommand& cmd) {
   const std::string what = cmd.device.empty() ? std::string("NCMD") : "DCMD " + cmd.device;
   for (const auto& r : cmd.refused)

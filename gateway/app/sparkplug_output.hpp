@@ -20,6 +20,12 @@
 //     a TPDO -> DDATA of the metrics that changed, EMCY -> DDATA of the
 //     EMCY metrics, each stamped with the frame's time; a bus state change
 //     -> NDATA.
+//   node_changed(net, node, listed)  the node's settings or EDS/DCF changed
+//     at run time (PUT .../config, .../eds): its `sparkplug-metrics` become
+//     `listed`, and a device that is online (or being born) is born anew
+//     at once as above (model from the new EDS, the listed objects read,
+//     DBIRTH); an offline one with its next boot-up. Its device id stays
+//     what it was (a renamed node keeps its id until the next start).
 //   on_command(cmd)          an NCMD/DCMD write the EdgeSession returned:
 //     with sparkplug.commands-role none it is ignored (logged); otherwise
 //     its items go to the request core as that role (caller
@@ -91,6 +97,7 @@ class SparkplugOutput {
   void start();
   void on_event(std::uint32_t network, const canopen::Event& ev);
   void on_command(const sparkplug::WriteCommand& cmd);
+  void node_changed(std::uint32_t network, std::uint8_t node, const std::vector<SparkplugObject>& listed);
 
   // The device id of a node ("" for a node never configured nor heard).
   std::string device_id(std::uint32_t network, std::uint8_t node) const;

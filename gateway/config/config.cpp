@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -30,7 +31,10 @@ namespace fs = std::filesystem;
 // where it is. Unknown keys are errors: a typo must not be a silent default.
 class At {
  public:
-  At(const YAML::Node& n, std::string path, const std::string& file) : n_(n), path_(std::move(path)), file_(file) {}
+  // lines: whether messages name the line (not for a request body, whose
+  // lines are the serialised JSON's, not what the user wrote).
+  At(const YAML::Node& n, std::string path, const std::string& file, bool lines = true)
+      : n_(n), path_(std::move(path)), file_(file), lines_(lines) {}
 
   [[noreturn]] void fail(const std::string& reason) const { throw ConfigError(where() + ": " + reason); }
 
@@ -38,7 +42,7 @@ class At {
   std::string where() const {
     std::string w = file_.empty() ? std::string("<config>") : file_;
     const auto mark = n_.Mark();
-    if (mark.line >= 0) w += ":" + std::to_string(mark.line + 1);
+    if (lines_ && mark.line >= 0) w += ":" + std::to_string(mark.line + 1);
     return w + ": " + (path_.empty() ? std::string("(top level)") : path_);
   }
 
@@ -56,7 +60,7 @@ class At {
       if (std::none_of(allowed.begin(), allowed.end(), [&](const char* a) { return key == a; })) {
         std::string list;
         for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + a;
-        At(kv.first, join(key), file_).fail("unknown key (known here: " + list + ")");
+        At(kv.first, join(key), file_, lines_).fail("unknown key (known here: " + list + ")");
       }
     }
   }
@@ -65,7 +69,7 @@ class At {
     if (is_null() || !n_.IsMap()) return std::nullopt;
     auto child = n_[key];
     if (!child) return std::nullopt;
-    return At(child, join(key), file_);
+    return At(child, join(key), file_, lines_);
   }
 
   std::vector<At> items() const {
@@ -73,7 +77,7 @@ class At {
     if (is_null()) return out;
     if (!n_.IsSequence()) fail("expected a list");
     std::size_t i = 0;
-    for (const auto& item : n_) out.emplace_back(item, path_ + "[" + std::to_string(i++) + "]", file_);
+    for (const auto& item : n_) out.emplace_back(item, path_ + "[" + std::to_string(i++) + "]", file_, lines_);
     return out;
   }
 
@@ -112,6 +116,7 @@ class At {
   YAML::Node n_;
   std::string path_;
   const std::string& file_;
+  bool lines_ = true;
 };
 
 std::string resolve(const std::string& base_dir, const std::string& name) {
@@ -139,6 +144,8 @@ std::chrono::milliseconds ms(const At& a, std::uint64_t max = 65535) {
   return std::chrono::milliseconds(a.integer(0, max));
 }
 
+// One `nodes:` entry: the file parser's and parse_node_config()'s (the
+// run-time configuration over REST), so both give the same reasons.
 void parse_node(const At& a, NodeConfig& n, const std::string& dir) {
   a.expect_map({"id", "name", "eds", "dcf", "heartbeat-consumer-ms", "guarding", "boot", "sparkplug-metrics"});
   auto id = a.get("id");
@@ -500,6 +507,48 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
 
 }  // namespace
 
+NodeConfig parse_node_config(std::string_view text, const std::string& source, const std::string& dir, bool lines) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(std::string(text));
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source + (lines ? ":" + std::to_string(e.mark.line + 1) : std::string()) +
+                      ": not valid YAML or JSON: " + e.msg);
+  }
+  At a(root, "", source, lines);
+  if (!a.is_map()) a.fail("expected a mapping of keys (one nodes: entry)");
+  NodeConfig n;
+  parse_node(a, n, dir);
+  return n;
+}
+
+boost::json::object node_config_json(const NodeConfig& n) {
+  boost::json::object o;
+  o["id"] = n.id;
+  if (!n.name.empty()) o["name"] = n.name;
+  if (!n.eds.empty()) o["eds"] = n.eds;
+  if (n.heartbeat_consumer) o["heartbeat-consumer-ms"] = n.heartbeat_consumer->count();
+  else o["heartbeat-consumer-ms"] = "auto";
+  if (n.guarding.guard_time.count() > 0)
+    o["guarding"] = {{"guard-time-ms", n.guarding.guard_time.count()}, {"life-time-factor", n.guarding.life_time_factor}};
+  if (n.boot) {
+    boost::json::object b{{"check-identity", n.boot->check_identity}, {"configure", n.boot->configure},
+                          {"start", n.boot->start}};
+    if (n.boot->read_pdo_config) b["read-pdo-config"] = *n.boot->read_pdo_config;
+    o["boot"] = std::move(b);
+  }
+  if (!n.sparkplug_metrics.empty()) {
+    boost::json::array m;
+    for (const auto& obj : n.sparkplug_metrics) {
+      char buf[16];
+      std::string t(buf, static_cast<std::size_t>(std::snprintf(buf, sizeof buf, "%04Xh", obj.index)));
+      if (obj.sub) t += ":" + std::to_string(*obj.sub);
+      m.emplace_back(t);
+    }
+    o["sparkplug-metrics"] = std::move(m);
+  }
+  return o;
+}
 
 std::string default_gateway_id() {
   char host[256] = {};

@@ -7,6 +7,7 @@
 // Pure data and functions; thread-safe.
 #pragma once
 
+#include <boost/json/object.hpp>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -14,6 +15,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "canopen/lss/frames.hpp"
@@ -224,6 +226,17 @@ struct Config {
 // Parses YAML text; `file` is used in error messages only. Relative file
 // names inside (EDS, TLS) are resolved against the file's directory.
 Config parse_config(const std::string& yaml_text, const std::string& file);
+// One `nodes:` entry on its own (a mapping in YAML or JSON: JSON is YAML),
+// checked by the same rules and with the same reasons as in a file
+// (run-time configuration, the state-dir overlay). `source` starts the
+// messages ("request body", a file name); `lines`: whether they name the
+// line; relative eds/dcf names resolve against `dir`. Throws ConfigError.
+NodeConfig parse_node_config(std::string_view text, const std::string& source, const std::string& dir,
+                             bool lines = true);
+// `n` as the keys of its `nodes:` entry (parse_node_config() reads it back
+// to the same NodeConfig): id, name, eds, heartbeat-consumer-ms ("auto" or
+// ms), guarding, boot, sparkplug-metrics; absent keys are the defaults.
+boost::json::object node_config_json(const NodeConfig& n);
 // Reads and parses a file. Throws ConfigError.
 Config load_config(const std::string& file);
 // Applies the command line on top (flags win) and checks the result as a

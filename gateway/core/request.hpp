@@ -203,6 +203,9 @@ struct NodeConfigRead {
 struct NodeConfigWrite {
   std::uint8_t node = 0;
   boost::json::value settings;
+  // DELETE .../config: drop the state-dir settings (and a kept EDS), back to
+  // the YAML's; `settings` is then unused.
+  bool revert = false;
 };
 // An EDS or DCF file for the node: checked like `canopen-eds check` (400
 // with "FILE:LINE: reason"), then used at once and kept in state-dir.
@@ -327,8 +330,12 @@ struct LssInquired {
 struct NodeConfigView {
   std::uint32_t network = 0;
   std::uint8_t node = 0;
-  boost::json::value settings;
+  boost::json::value settings;  // null when the node is not configured
   std::string source;
+  std::string file;  // source "state-dir": the file that holds the settings
+  // NodeEdsWrite: the reader's warnings as `canopen-eds check` prints them
+  // ("FILE:LINE: warning: reason"); the file was accepted.
+  std::vector<std::string> warnings;
 };
 // One object of a DCF read-back or apply that did not go through.
 struct ObjectOutcome {

@@ -186,9 +186,10 @@ void RequestCore::execute(Request request, Done done) {
         else if constexpr (std::is_same_v<T, PdoConfigRead>) pdo_config_read(c, cmd);
         else if constexpr (std::is_same_v<T, Undecodable>) {}  // answered above
         else if constexpr (std::is_same_v<T, NodeConfigRead> || std::is_same_v<T, NodeConfigWrite> ||
-                           std::is_same_v<T, NodeEdsWrite> || std::is_same_v<T, DcfRead> ||
-                           std::is_same_v<T, DcfApply> || std::is_same_v<T, NodeStore> ||
-                           std::is_same_v<T, ProgramDownload>)
+                           std::is_same_v<T, NodeEdsWrite>)
+          node_config(c.caller, c.network, command, c.done);  // node_config.cpp
+        else if constexpr (std::is_same_v<T, DcfRead> || std::is_same_v<T, DcfApply> ||
+                           std::is_same_v<T, NodeStore> || std::is_same_v<T, ProgramDownload>)
           c.done(problem(501, "not implemented yet (issue 17 in progress)"));
         else lss(c, command);  // the LSS commands
       },

@@ -62,6 +62,8 @@ struct PdoConfig;
 
 namespace gateway::core {
 
+class NodeSettings;
+
 // One LSS service (CiA 305) as the core asks the network's LSS master for it.
 using LssStep = std::variant<LssSwitchGlobal, LssSwitchSelective, LssSetNodeId, LssSetBitTiming,
                              LssActivateBitTiming, LssStore, LssInquiry, LssFastscan>;
@@ -176,6 +178,11 @@ class RequestCore {
 
   void execute(Request request, Done done);
 
+  // Run-time node configuration (NodeConfigRead/Write, NodeEdsWrite) goes
+  // to `settings` (node_settings.hpp), which MUST outlive the core; without
+  // one those commands answer 500.
+  void set_node_settings(NodeSettings* settings) { node_settings_ = settings; }
+
   const Counters& counters() const { return counters_; }
   // The per-caller share of each node's SDO queue.
   std::size_t sdo_share() const { return shares_.share(); }
@@ -188,6 +195,8 @@ class RequestCore {
   void rpdo_write(Context& c, const RpdoWrite& cmd);
   void sync(Context& c, const Sync& cmd);
   void pdo_config_read(Context& c, const PdoConfigRead& cmd);
+  // NodeConfigRead, NodeConfigWrite, NodeEdsWrite (node_config.cpp).
+  void node_config(const Caller& caller, std::uint32_t net, const Command& cmd, const Done& done);
   // LSS: every LSS command; `lss_busy_` holds the network while one runs.
   void lss(Context& c, const Command& cmd);
   struct LssRun;
@@ -209,6 +218,7 @@ class RequestCore {
   Problem transfer_failed(const canopen::sdo::TransferResult& res);
 
   Networks& net_;
+  NodeSettings* node_settings_ = nullptr;
   const auth::TokenStore& tokens_;
   Settings settings_;
   AuditSink audit_;

@@ -152,7 +152,11 @@ bool is_state_changing(std::string_view method) { return method != "GET" && meth
 bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body) {
   if (!content_type) return !has_body;
   const auto media = trim(content_type->substr(0, content_type->find(';')));
-  return iequals(media, "application/json") || iequals(media, "application/x-protobuf");
+  // application/octet-stream: files (an EDS/DCF, a program image). Like the
+  // other two it is not a CORS-safelisted type, so a browser asks first
+  // (preflight) before sending it cross-site, which the API never allows.
+  return iequals(media, "application/json") || iequals(media, "application/x-protobuf") ||
+         iequals(media, "application/octet-stream");
 }
 
 OriginPolicy::OriginPolicy(Settings s) {

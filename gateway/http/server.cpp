@@ -549,8 +549,9 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
         impl_->counters.refused_media_type.fetch_add(1, std::memory_order_relaxed);
         Response r = Response::problem(
             415,
-            "the body of " + req->method + " " + req->path + " must be application/json or application/x-protobuf");
-        r.headers.emplace_back("Accept", "application/json, application/x-protobuf");
+            "the body of " + req->method + " " + req->path +
+                " must be application/json, application/x-protobuf or application/octet-stream");
+        r.headers.emplace_back("Accept", "application/json, application/x-protobuf, application/octet-stream");
         send(std::move(r));
         return;
       }

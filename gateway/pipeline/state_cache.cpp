@@ -21,6 +21,15 @@ void StateCache::add_configured_node(std::uint32_t network, std::uint8_t node, s
   n.name = std::move(name);
 }
 
+void StateCache::unconfigure_node(std::uint32_t network, std::uint8_t node) {
+  auto it = networks_.find(network);
+  if (it == networks_.end()) return;
+  auto n = it->second.nodes.find(node);
+  if (n == it->second.nodes.end()) return;
+  n->second.configured = false;
+  n->second.name.clear();
+}
+
 NodeInfo& StateCache::node_ref(NetworkInfo& net, std::uint8_t node) {
   auto& n = net.nodes[node];
   n.id = node;

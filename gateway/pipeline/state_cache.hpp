@@ -84,6 +84,9 @@ class StateCache {
   // Registers a network (numbered from 1) and its configured nodes.
   NetworkInfo& add_network(std::uint32_t number, std::string interface, bool simulated);
   void add_configured_node(std::uint32_t network, std::uint8_t node, std::string name);
+  // The node is no longer configured (run-time configuration removed it);
+  // what was heard of it stays.
+  void unconfigure_node(std::uint32_t network, std::uint8_t node);
 
   // Events of an unregistered network are ignored.
   void apply(std::uint32_t network, const canopen::Event& ev);

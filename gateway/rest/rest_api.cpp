@@ -206,6 +206,14 @@ void get_gateway(App& app, const Request&, Responder respond) {
     n["simulated"] = nets[i].simulated;
     n["nodeId"] = nets[i].node_id;
     if (auto s = app.bus_state(number)) n["bus"] = std::string(canopen::can::to_string(*s));
+    // Where each configured node's settings come from (run-time configuration).
+    json::array nodes;
+    for (const auto& origin : app.node_origins(number)) {
+      json::object entry{{"node", origin.node}, {"source", origin.source}};
+      if (!origin.file.empty()) entry["file"] = origin.file;
+      nodes.push_back(std::move(entry));
+    }
+    n["nodes"] = std::move(nodes);
     list.push_back(std::move(n));
   }
   o["networks"] = std::move(list);
@@ -776,6 +784,97 @@ void lss_devices(App& app, const Request& req, Responder respond) {
                          }));
 }
 
+// ---- Run-time node configuration (contract "Remote configuration and maintenance") ----
+// GET (viewer) / PUT / DELETE .../config and PUT .../eds (admin), through the
+// request core (core/node_config.cpp; the App applies and keeps them).
+
+json::object node_config_json(const core::NodeConfigView& v) {
+  json::object out;
+  out["network"] = v.network;
+  out["node"] = v.node;
+  out["source"] = v.source;
+  if (!v.file.empty()) out["file"] = v.file;
+  out["settings"] = v.settings;
+  return out;
+}
+
+// The node of the path as the command, or the 400 of a bad node-ID.
+template <typename Make>
+core::Command config_command(const Request& req, core::Operation op, Make make) {
+  std::string error;
+  const auto node = path_node(req, false, error);
+  if (!node) return undecodable(op, 0, error, true);
+  return make(*node);
+}
+
+void config_request(App& app, const Request& req, Responder respond, core::Command command) {
+  const auto net = path_network(req, respond);
+  if (!net) return;
+  auto r = core_request(req, *net, std::move(command));
+  r.check_bus = false;  // settings, not the bus
+  app.requests().execute(std::move(r), json_result<core::NodeConfigView>(std::move(respond), node_config_json));
+}
+
+void get_node_config(App& app, const Request& req, Responder respond) {
+  config_request(app, req, std::move(respond), config_command(req, core::Operation::config_read, [](std::uint8_t n) {
+                   return core::Command{core::NodeConfigRead{n}};
+                 }));
+}
+
+void put_node_config(App& app, const Request& req, Responder respond) {
+  config_request(app, req, std::move(respond), config_command(req, core::Operation::config_write, [&](std::uint8_t n) {
+                   boost::system::error_code ec;
+                   auto body = json::parse(req.body, ec);
+                   if (ec || !body.is_object())
+                     return core::Command{undecodable(core::Operation::config_write, n,
+                                                      "the body must be a JSON object: the keys of one nodes: entry "
+                                                      "of the configuration file (name, eds, heartbeat-consumer-ms, "
+                                                      "guarding, boot, sparkplug-metrics)",
+                                                      false)};
+                   return core::Command{core::NodeConfigWrite{n, std::move(body), false}};
+                 }));
+}
+
+void delete_node_config(App& app, const Request& req, Responder respond) {
+  config_request(app, req, std::move(respond), config_command(req, core::Operation::config_write, [](std::uint8_t n) {
+                   return core::Command{core::NodeConfigWrite{n, {}, true}};
+                 }));
+}
+
+// The uploaded file's name: ?name=, else Content-Disposition's filename
+// (for messages; the kept copy has the gateway's own name).
+std::string upload_name(const Request& req) {
+  if (auto n = req.query_param("name"); n && !n->empty()) return std::string(*n);
+  const auto cd = req.header("content-disposition");
+  if (!cd) return {};
+  const auto at = cd->find("filename=");
+  if (at == std::string_view::npos) return {};
+  auto v = cd->substr(at + 9);
+  v = v.substr(0, v.find(';'));
+  if (v.size() >= 2 && v.front() == '"' && v.back() == '"') v = v.substr(1, v.size() - 2);
+  // Only the last path element: a name for messages, never a path.
+  if (const auto slash = v.find_last_of("/\\"); slash != std::string_view::npos) v = v.substr(slash + 1);
+  return std::string(v);
+}
+
+void put_node_eds(App& app, const Request& req, Responder respond) {
+  const auto net = path_network(req, respond);
+  if (!net) return;
+  auto command = config_command(req, core::Operation::config_write, [&](std::uint8_t n) {
+    return core::Command{core::NodeEdsWrite{n, req.body, upload_name(req)}};
+  });
+  auto r = core_request(req, *net, std::move(command));
+  r.check_bus = false;
+  app.requests().execute(std::move(r),
+                         json_result<core::NodeConfigView>(std::move(respond), [](const core::NodeConfigView& v) {
+                           auto out = node_config_json(v);
+                           json::array warnings;
+                           for (const auto& w : v.warnings) warnings.emplace_back(w);
+                           out["warnings"] = std::move(warnings);
+                           return out;
+                         }));
+}
+
 }  // namespace
 
 void register_rest_routes(http::HttpServer& server, App& app) {
@@ -811,6 +910,11 @@ void register_rest_routes(http::HttpServer& server, App& app) {
   json_route("POST", "/api/v1/networks/{net}/lss/configure", lss_configure);
   json_route("POST", "/api/v1/networks/{net}/lss/assign-all", lss_assign_all);
   json_route("GET", "/api/v1/networks/{net}/lss/devices", lss_devices);
+  // Run-time node configuration (issue 17 item 1).
+  json_route("GET", node + "/config", get_node_config);
+  json_route("PUT", node + "/config", put_node_config);
+  json_route("DELETE", node + "/config", delete_node_config);
+  json_route("PUT", node + "/eds", put_node_eds);
 }
 
 }  // namespace gateway

@@ -72,9 +72,17 @@ class Network : public DeadlineSource {
   Network& operator=(const Network&) = delete;
 
   // Describes a remote node (its EDS/DCF dictionary, copied): its TPDOs are
-  // decoded and its RPDOs can be written through rpdo(). Returns problems
-  // that leave parts undecodable.
+  // decoded and its RPDOs can be written through rpdo(). Replaces an earlier
+  // description of the node as a whole (PDOs the new one lacks are no longer
+  // decoded or produced; what was read from the device is forgotten).
+  // Returns problems that leave parts undecodable.
   std::vector<std::string> add_node(std::uint8_t node, const od::ObjectDictionary& description);
+  // Forgets a node's description and boot-up configuration (run-time
+  // configuration): its TPDOs are reported raw again, its RPDOs no longer
+  // produced, a running PDO read ends cancelled (PdoReadReport::cancelled)
+  // and a running boot-up sequence is dropped without an event. Watching
+  // (nmt()) is not touched.
+  void remove_node(std::uint8_t node);
   // Boot-up configuration of `node` (master/boot_configurator.hpp): on each boot-up its
   // identity is checked, its DCF written and it is started, as `config`
   // says; every step is a BootConfigEvent in this network's stream.

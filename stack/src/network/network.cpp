@@ -55,6 +55,8 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
 }
 
 std::vector<std::string> Network::add_node(std::uint8_t node, const od::ObjectDictionary& description) {
+  // RPDOs of an earlier description that this one lacks must not go on being produced.
+  for (std::uint16_t number = 1; number <= pdo::kMaxPdoNumber; ++number) rpdo_.remove(node, number);
   (void)pdo_table_.add_node(node, description);  // its problems are the decoder's below
   auto problems = pdo_.add_node(node, description);
   for (const auto& cfg : pdo::read_all(description, pdo::Direction::Receive, &problems)) {
@@ -63,6 +65,15 @@ std::vector<std::string> Network::add_node(std::uint8_t node, const od::ObjectDi
       problems.push_back("RPDO" + std::to_string(cfg.number) + ": " + r.error().code.message() + " " + r.error().detail);
   }
   return problems;
+}
+
+void Network::remove_node(std::uint8_t node) {
+  pdo_reader_.cancel(node, now_);
+  for (std::uint16_t number = 1; number <= pdo::kMaxPdoNumber; ++number) rpdo_.remove(node, number);
+  pdo_.remove_node(node);
+  pdo_table_.remove_node(node);
+  if (boot_) boot_->remove(node);
+  boot_reads_.erase(node);
 }
 
 bool Network::configure_boot(std::uint8_t node, master::NodeBootConfig config, bool read_pdo_config) {

@@ -520,6 +520,34 @@ TEST(SparkplugOutput, ANewPdoConfigurationIsANewBirth) {
   EXPECT_NE(metric(p, "Read inputs/Input 1"), nullptr);
 }
 
+// Issue 17 item 1: a node's settings or EDS changed at run time rebirth an
+// online device at once (Sparkplug B 3.0: a DBIRTH states the device's
+// whole metric set) with the new `sparkplug-metrics`; an offline one waits
+// for its next boot-up.
+TEST(SparkplugOutput, AChangedNodeConfigurationIsANewBirthWhileOnline) {
+  Rig rig;
+  rig.output->node_changed(1, kNode, {{0x2300, {}}});
+  EXPECT_TRUE(rig.fake.requests.empty()) << "offline: nothing to send yet";
+  rig.boot_up();
+  ASSERT_EQ(rig.fake.requests.size(), 1u) << "only the one listed object now";
+  rig.fake.answer(0, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned32, 7)});
+  ASSERT_EQ(rig.published("DBIRTH").size(), 1u);
+  const auto first = parse(rig.published("DBIRTH")[0]->payload);
+  EXPECT_EQ(metric(first, "Speed"), nullptr);
+
+  rig.output->node_changed(1, kNode, {{0x2200, {}}, {0x2300, {}}});
+  ASSERT_EQ(rig.fake.requests.size(), 2u) << "reborn at once: the listed objects read again";
+  rig.fake.answer(1, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned16, 42)});
+  rig.fake.answer(2, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned32, 7)});
+  const auto dbirth = rig.published("DBIRTH");
+  ASSERT_EQ(dbirth.size(), 2u);
+  EXPECT_EQ(dbirth[1]->topic, kDevice) << "the same device id";
+  const auto second = parse(dbirth[1]->payload);
+  const auto* speed = metric(second, "Speed");
+  ASSERT_NE(speed, nullptr);
+  EXPECT_EQ(speed->int_value(), 42u);
+}
+
 // A bus state change is NDATA of `Network <N>/Bus State`.
 TEST(SparkplugOutput, BusStateChangeIsNdata) {
   Rig rig;

@@ -58,6 +58,16 @@ const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
                    R"("serialNumber":1426063361},"nodeId":30})"}},
     {{"POST", "/api/v1/networks/{net}/lss/assign-all"}, {Role::Admin, R"({"firstNodeId":40,"timeoutMs":5})"}},
     {{"GET", "/api/v1/networks/{net}/lss/devices"}, {Role::Admin, ""}},
+    // Contract "Remote configuration and maintenance": reading a node's
+    // settings viewer, changing them admin (node 5 keeps the demo's settings;
+    // the EDS has what later requests use).
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/config"}, {Role::Viewer, ""}},
+    {{"PUT", "/api/v1/networks/{net}/nodes/{node}/config"},
+     {Role::Admin, R"x({"name":"drive-x","eds":"(built in)","heartbeat-consumer-ms":2000,"boot":{"start":true}})x"}},
+    {{"DELETE", "/api/v1/networks/{net}/nodes/{node}/config"}, {Role::Admin, ""}},
+    {{"PUT", "/api/v1/networks/{net}/nodes/{node}/eds"},
+     {Role::Admin, "[DeviceInfo]\nVendorName=Test\n[1017]\nParameterName=Producer heartbeat time\nObjectType=0x7\n"
+                   "DataType=0x0006\nAccessType=rw\nDefaultValue=500\n"}},
     {{"GET", "/api/v1/openapi.json"}, {Role::None, ""}},
     {{"GET", "/metrics"}, {Role::Viewer, ""}},
 };
@@ -76,6 +86,7 @@ std::string concrete(std::string pattern) {
 struct SecureRig {
   explicit SecureRig(double rate_limit = 0, double burst = 1)
       : web(make_web()),
+        state(std::filesystem::temp_directory_path() / ("auth-state-" + std::to_string(::getpid()))),
         rig(
             {},
             [&](Config& c) {
@@ -85,6 +96,7 @@ struct SecureRig {
               c.mqtt.requests_role = Role::None;
               c.http.rate_limit = rate_limit;
               c.http.rate_burst = burst;
+              c.state_dir = state.string();  // run-time node configuration keeps its changes there
             },
             log.file, web) {
     EXPECT_TRUE(rig.run_until([&] { return rig.operational(5); })) << "node 5 did not start";
@@ -92,6 +104,7 @@ struct SecureRig {
   ~SecureRig() {
     rig.server->stop();
     std::filesystem::remove_all(web);
+    std::filesystem::remove_all(state);
   }
   static std::filesystem::path make_web() {
     auto dir = std::filesystem::temp_directory_path() / ("auth-web-" + std::to_string(::getpid()));
@@ -121,6 +134,7 @@ struct SecureRig {
 
   MemoryLog log;  // outlives rig (declared before it)
   std::filesystem::path web;
+  std::filesystem::path state;
   test::RestRig rig;
 };
 

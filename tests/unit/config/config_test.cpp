@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include <boost/json/serialize.hpp>
+
 namespace gateway {
 namespace {
 
@@ -452,6 +454,57 @@ TEST(Config, HeartbeatConsumerIsAutoByDefaultZeroOrATime) {
   EXPECT_EQ(config_error(node + "1.5\n"),
             "gw.yaml:5: networks[0].nodes[0].heartbeat-consumer-ms: '1.5' is not a whole number");
   EXPECT_THAT(config_error(node + "[1]\n"), HasSubstr("heartbeat-consumer-ms: expected a single value"));
+}
+
+// Issue 17 item 1: one `nodes:` entry on its own (PUT .../config, the
+// state-dir overlay) is read by the file's rules with the file's reasons;
+// node_config_json() writes what parse_node_config() reads back the same.
+TEST(Config, OneNodeEntryAloneHasTheFilesRulesAndReasons) {
+  const std::string dir = std::string(CANOPEN_SOURCE_DIR) + "/deploy/eds";
+  const NodeConfig n = parse_node_config(
+      R"({"id": 5, "name": "drive", "eds": "cia402-drive.eds", "heartbeat-consumer-ms": 1500,
+          "guarding": {"guard-time-ms": 100, "life-time-factor": 3},
+          "boot": {"configure": true, "start": true, "read-pdo-config": false}, "sparkplug-metrics": ["2300h", "6060h:0"]})",
+      "request body", dir, false);
+  EXPECT_EQ(n.id, 5);
+  EXPECT_EQ(n.name, "drive");
+  EXPECT_EQ(n.eds, kEds) << "relative to the directory given";
+  EXPECT_EQ(n.heartbeat_consumer, 1500ms);
+  EXPECT_EQ(n.guarding.guard_time, 100ms);
+  ASSERT_TRUE(n.boot);
+  EXPECT_TRUE(n.boot->configure);
+  EXPECT_EQ(n.boot->read_pdo_config, false);
+  ASSERT_EQ(n.sparkplug_metrics.size(), 2U);
+
+  // Round trip through the JSON keys (JSON is YAML).
+  const NodeConfig back = parse_node_config(boost::json::serialize(node_config_json(n)), "x", "", false);
+  EXPECT_EQ(node_config_json(back), node_config_json(n));
+  EXPECT_EQ(back.sparkplug_metrics, n.sparkplug_metrics);
+  EXPECT_EQ(back.guarding.life_time_factor, 3);
+
+  // The same reason as in a file, without a line number for a body.
+  const std::string file_reason =
+      config_error("networks:\n  - interface: can0\n    nodes:\n      - {id: 5, heartbeat-consumer-ms: never}\n");
+  std::string body_reason;
+  try {
+    (void)parse_node_config(R"({"id": 5, "heartbeat-consumer-ms": "never"})", "request body", "", false);
+  } catch (const ConfigError& e) {
+    body_reason = e.what();
+  }
+  EXPECT_EQ(body_reason,
+            "request body: heartbeat-consumer-ms: 'never' is not auto, 0 (not watched) or a consumer time in ms "
+            "(1..65535)");
+  EXPECT_THAT(file_reason, HasSubstr("heartbeat-consumer-ms: 'never' is not auto, 0 (not watched)"));
+  EXPECT_THROW((void)parse_node_config(R"({"id": 5, "colour": "red"})", "b", "", false), ConfigError);
+  EXPECT_THROW((void)parse_node_config("[1, 2]", "b", "", false), ConfigError);
+  EXPECT_THROW((void)parse_node_config(R"({"id": 5, "eds": "missing.eds"})", "b", dir, false), ConfigError);
+  // In a file the line is named.
+  try {
+    (void)parse_node_config("id: 5\nguarding: {guard-time-ms: 100}\n", "net1-node5.yaml", "");
+    ADD_FAILURE();
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(std::string(e.what()), HasSubstr("net1-node5.yaml:2: guarding: guard-time-ms and life-time-factor"));
+  }
 }
 
 // Issue 11: boot: {read-pdo-config: true} per network (default for its

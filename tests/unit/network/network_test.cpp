@@ -215,6 +215,50 @@ TEST(Network, SynchronousRpdoDataWaitsForTheSync_7_2_2_2) {
   EXPECT_EQ(std::vector<std::uint8_t>(rig.device_rx[0].payload().begin(), rig.device_rx[0].payload().end()), (std::vector<std::uint8_t>{0x06, 0x00}));
 }
 
+// Run-time node configuration (issue 17 item 1): a node's description can be
+// dropped and given again while the network runs. Without one its TPDOs are
+// reported raw (7.2.2: the mapping says what the bytes mean) and its RPDOs
+// are not produced; with a new one they are decoded at once.
+TEST(Network, ANodesDescriptionCanBeRemovedAndGivenAgainAtRunTime_7_2_2) {
+  Rig rig;
+  auto tpdo_event = [&rig] {
+    rig.events.clear();
+    EXPECT_FALSE(rig.tpdo.set_value(kDevice, 1, 0x6041, 0, Value::of_unsigned(DataType::Unsigned16, 0x0637),
+                                    rig.clock.now()));
+    rig.bus.deliver();
+    const auto pdos = rig.of<PdoEvent>();
+    EXPECT_EQ(pdos.size(), 1U);
+    return pdos.empty() ? PdoEvent{} : std::get<PdoEvent>(pdos[0]->body);
+  };
+  rig.net.remove_node(kDevice);
+  const auto raw = tpdo_event();
+  EXPECT_TRUE(raw.values.empty()) << "no description: raw bytes only";
+  EXPECT_FALSE(raw.raw.empty());
+  EXPECT_FALSE(rig.net.pdo_config().has_node(kDevice));
+  EXPECT_EQ(rig.net.rpdo().config(kDevice, 2), nullptr) << "no description: its RPDOs are not produced";
+
+  ASSERT_TRUE(rig.net.add_node(kDevice, rig.desc.od).empty());
+  const auto decoded = tpdo_event();
+  ASSERT_EQ(decoded.values.size(), 1U);
+  EXPECT_EQ(decoded.values[0].index, 0x6041);
+  EXPECT_NE(rig.net.rpdo().config(kDevice, 2), nullptr);
+}
+
+// add_node() of a node described before replaces the description as a
+// whole: an RPDO the new one disables (COB-ID bit 31, 7.5.2.35) is no
+// longer produced.
+TEST(Network, AddingANodeAgainReplacesItsRpdos_7_5_2_35) {
+  Rig rig;
+  ASSERT_NE(rig.net.rpdo().config(kDevice, 2), nullptr);
+  od::ObjectDictionary changed = rig.desc.od;
+  const auto cob = changed.get(0x1401, 1);
+  ASSERT_TRUE(cob);
+  ASSERT_FALSE(changed.set(0x1401, 1, Value::of_unsigned(DataType::Unsigned32, std::get<std::uint64_t>(cob->data) | 0x80000000U)));
+  (void)rig.net.add_node(kDevice, changed);
+  EXPECT_EQ(rig.net.rpdo().config(kDevice, 2), nullptr);
+  EXPECT_NE(rig.net.rpdo().config(kDevice, 1), nullptr) << "the others stay";
+}
+
 // The network's LSS master (CiA 305, issue 16): the slaves' answers (7E4h)
 // reach it through Network::on_frame, its step windows run in on_time, and
 // a submit reports the network's new deadline.

@@ -1,0 +1,89 @@
+// Run-time node configuration in the request core (contract "Remote
+// configuration and maintenance"): GET/PUT/DELETE .../config and PUT
+// .../eds. The role, network and node-ID are checked by execute(); here the
+// gateway's own node is refused, an EDS/DCF is read exactly as
+// `canopen-eds check` reads it, and every change gets an audit line.
+#include <string>
+
+#include "canopen/eds/eds.hpp"
+#include "core/node_settings.hpp"
+#include "core/request_core.hpp"
+#include "eds_report.hpp"
+
+namespace gateway::core {
+
+namespace {
+
+Problem bad_request(std::string detail) {
+  Problem p;
+  p.status = 400;
+  p.detail = std::move(detail);
+  return p;
+}
+
+std::string who_text(const Caller& c) { return c.who.empty() ? std::string("anonymous") : c.who; }
+
+}  // namespace
+
+void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Command& command, const Done& done) {
+  const std::uint8_t node = std::visit(
+      [](const auto& c) -> std::uint8_t {
+        if constexpr (requires { c.node; }) return c.node;
+        else return 0;
+      },
+      command);
+  if (node_settings_ == nullptr) {
+    Problem p;
+    p.status = 500;
+    p.detail = "run-time node configuration is not available in this process";
+    return done(std::move(p));
+  }
+  if (node == net_.own_node_id(net)) {
+    return done(bad_request("node " + std::to_string(node) + " is the gateway's own node-ID on network " +
+                            std::to_string(net) + "; its settings are the network's (heartbeat-ms, sync, time)"));
+  }
+  if (std::holds_alternative<NodeConfigRead>(command)) return done(node_settings_->node_config(net, node));
+
+  const std::string where = "net " + std::to_string(net) + " node " + std::to_string(node);
+  Result result;
+  std::string what;
+  if (const auto* w = std::get_if<NodeConfigWrite>(&command)) {
+    if (w->revert) {
+      what = "configuration reverted to the configuration file";
+      result = node_settings_->revert_node_config(net, node);
+    } else {
+      what = "configuration changed";
+      result = node_settings_->write_node_config(net, node, w->settings);
+    }
+  } else {
+    const auto& e = std::get<NodeEdsWrite>(command);
+    const std::string name = e.file_name.empty() ? "node" + std::to_string(node) + ".eds" : e.file_name;
+    what = "EDS/DCF " + name + " uploaded";
+    if (e.text.empty()) {
+      result = bad_request(name + ": empty: the body is the EDS or DCF file");
+    } else {
+      // As `canopen-eds check --node-id N` and the start-up read it: the
+      // node's ID resolves $NODEID and wins over a DCF's NodeID.
+      try {
+        auto desc = canopen::eds::parse_device_description(e.text, name, node);
+        std::vector<std::string> warnings;
+        for (const auto& line : desc.warnings) warnings.push_back(edstool::warning_line(name, line));
+        result = node_settings_->write_node_eds(net, node, std::move(desc), e.text);
+        if (auto* view = std::get_if<NodeConfigView>(&result)) view->warnings = std::move(warnings);
+      } catch (const canopen::eds::EdsError& err) {
+        result = bad_request(err.what());
+      }
+    }
+  }
+  if (const auto* p = std::get_if<Problem>(&result)) {
+    audit_("node configuration refused: " + who_text(caller) + ": " + where + ": " + what + ": " +
+           std::to_string(p->status) + " " + p->detail);
+  } else {
+    const auto& v = std::get<NodeConfigView>(result);
+    audit_("node configuration: " + who_text(caller) + ": " + where + ": " + what + " (settings from " + v.source +
+           (v.file.empty() ? std::string() : " " + v.file) + ")");
+  }
+  done(std::move(result));
+}
+
+}  // namespace gateway::core

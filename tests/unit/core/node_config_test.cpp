@@ -1,0 +1,166 @@
+// Run-time node configuration in the request core (gateway/core/node_config.cpp)
+// against a fake NodeSettings: contract "Remote configuration and
+// maintenance" (GET viewer, PUT/DELETE and the EDS upload admin), the own
+// node refused, an EDS/DCF read as `canopen-eds check` reads it (400 with
+// "FILE:LINE: reason", nothing handed on), an audit line for every change.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <boost/json/parse.hpp>
+
+#include "core/node_settings.hpp"
+#include "core/request_core.hpp"
+#include "support/fake_networks.hpp"
+
+namespace gateway::core {
+namespace {
+
+using ::testing::HasSubstr;
+using test_support::FakeNetworks;
+using test_support::kOwnNode;
+
+struct FakeSettings final : NodeSettings {
+  NodeConfigView node_config(std::uint32_t net, std::uint8_t node) const override {
+    return NodeConfigView{net, node, settings, source, {}, {}};
+  }
+  Result write_node_config(std::uint32_t net, std::uint8_t node, const boost::json::value& s) override {
+    ++writes;
+    if (refuse) return *refuse;
+    settings = s;
+    source = "state-dir";
+    return node_config(net, node);
+  }
+  Result write_node_eds(std::uint32_t net, std::uint8_t node, canopen::eds::DeviceDescription d,
+                        std::string_view text) override {
+    ++writes;
+    eds_text = std::string(text);
+    product = d.device.product_name;
+    source = "state-dir";
+    return node_config(net, node);
+  }
+  Result revert_node_config(std::uint32_t net, std::uint8_t node) override {
+    ++writes;
+    source = "config";
+    return node_config(net, node);
+  }
+  boost::json::value settings = boost::json::parse(R"({"id": 5, "name": "from-yaml"})");
+  std::string source = "config";
+  std::optional<Problem> refuse;
+  int writes = 0;
+  std::string eds_text, product;
+};
+
+struct Rig {
+  Rig() { core.set_node_settings(&settings); }
+  Result run(Command cmd, Role role = Role::Admin) {
+    Request r;
+    r.caller.authenticated = true;
+    r.caller.role = role;
+    r.caller.who = "alice";
+    r.caller.key = "k";
+    r.network = 1;
+    r.command = std::move(cmd);
+    std::optional<Result> out;
+    core.execute(std::move(r), [&out](Result res) { out = std::move(res); });
+    EXPECT_TRUE(out.has_value()) << "answered at once";
+    return out.value_or(Result{Problem{}});
+  }
+  bool audited(std::string_view part) const {
+    for (const auto& l : audit)
+      if (l.find(part) != std::string::npos) return true;
+    return false;
+  }
+  FakeNetworks nets;
+  auth::TokenStore tokens{{}};
+  std::vector<std::string> audit;
+  RequestCore core{nets, tokens, {}, [this](const std::string& l) { audit.push_back(l); }};
+  FakeSettings settings;
+};
+
+const Problem& problem(const Result& r) {
+  static const Problem none{};
+  if (!std::holds_alternative<Problem>(r)) {
+    ADD_FAILURE() << "not a problem";
+    return none;
+  }
+  return std::get<Problem>(r);
+}
+
+const char* kGoodEds =
+    "[FileInfo]\nFileName=io.eds\n[DeviceInfo]\nVendorName=Test\nProductName=IO\n"
+    "[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n"
+    "[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0x191\n";
+
+// Contract: GET .../config is viewer, PUT and the EDS upload admin.
+TEST(RequestCoreNodeConfig, ReadIsViewerChangesAreAdminAndRefusalsChangeNothing) {
+  Rig rig;
+  const auto view = rig.run(NodeConfigRead{5}, Role::Viewer);
+  ASSERT_TRUE(std::holds_alternative<NodeConfigView>(view));
+  EXPECT_EQ(std::get<NodeConfigView>(view).source, "config");
+  EXPECT_EQ(std::get<NodeConfigView>(view).settings.at("name"), "from-yaml");
+
+  for (const Role r : {Role::Viewer, Role::Operator}) {
+    EXPECT_EQ(problem(rig.run(NodeConfigWrite{5, boost::json::parse(R"({"name": "x"})"), false}, r)).status, 403);
+    EXPECT_EQ(problem(rig.run(NodeEdsWrite{5, kGoodEds, "io.eds"}, r)).status, 403);
+    EXPECT_EQ(problem(rig.run(NodeConfigWrite{5, {}, true}, r)).status, 403);
+  }
+  EXPECT_EQ(problem(rig.run(NodeConfigRead{5}, Role::None)).status, 401);
+  EXPECT_EQ(rig.settings.writes, 0);
+  EXPECT_TRUE(rig.audited("auth failure: alice: configuration change net 1 node 5: 403"));
+
+  const auto changed = rig.run(NodeConfigWrite{5, boost::json::parse(R"({"name": "x"})"), false});
+  ASSERT_TRUE(std::holds_alternative<NodeConfigView>(changed));
+  EXPECT_EQ(std::get<NodeConfigView>(changed).source, "state-dir");
+  EXPECT_TRUE(rig.audited("node configuration: alice: net 1 node 5: configuration changed (settings from state-dir)"));
+  const auto reverted = rig.run(NodeConfigWrite{5, {}, true});
+  ASSERT_TRUE(std::holds_alternative<NodeConfigView>(reverted));
+  EXPECT_EQ(std::get<NodeConfigView>(reverted).source, "config");
+  EXPECT_TRUE(rig.audited("configuration reverted to the configuration file"));
+}
+
+// What the settings refuse (a bad value: the file parser's reason) is
+// answered as it is and audited.
+TEST(RequestCoreNodeConfig, ARefusedChangeIsAnsweredWithItsReasonAndAudited) {
+  Rig rig;
+  Problem p;
+  p.status = 400;
+  p.detail = "request body: heartbeat-consumer-ms: 'never' is not auto, 0 (not watched) or a consumer time in ms (1..65535)";
+  rig.settings.refuse = p;
+  const auto r = rig.run(NodeConfigWrite{5, boost::json::parse(R"({"heartbeat-consumer-ms": "never"})"), false});
+  EXPECT_EQ(problem(r).status, 400);
+  EXPECT_EQ(problem(r).detail, p.detail);
+  EXPECT_TRUE(rig.audited("node configuration refused: alice: net 1 node 5: configuration changed: 400 request body"));
+}
+
+// The gateway's own node has no `nodes:` entry: its settings are the network's.
+TEST(RequestCoreNodeConfig, TheOwnNodeIsNotANodeEntry) {
+  Rig rig;
+  EXPECT_EQ(problem(rig.run(NodeConfigRead{kOwnNode}, Role::Viewer)).status, 400);
+  const auto r = rig.run(NodeConfigWrite{kOwnNode, boost::json::parse("{}"), false});
+  EXPECT_THAT(problem(r).detail, HasSubstr("is the gateway's own node-ID"));
+  EXPECT_EQ(problem(rig.run(NodeConfigRead{0}, Role::Viewer)).status, 400) << "node-IDs are 1..127";
+  EXPECT_EQ(rig.settings.writes, 0);
+}
+
+// CiA 306 through the gateway's EDS reader, as `canopen-eds check` reads it:
+// a file it refuses is 400 "FILE:LINE: reason" and reaches nothing.
+TEST(RequestCoreNodeConfig, AnEdsIsReadAsCanopenEdsCheckReadsIt_Cia306) {
+  Rig rig;
+  const std::string broken = std::string(kGoodEds) + "[6000]\nParameterName=In\nObjectType=0x7\nDataType=0x0005\n"
+                                                      "AccessType=ro\nDefaultValue=0x1FF\n";
+  const auto bad = rig.run(NodeEdsWrite{5, broken, "vendor.eds"});
+  EXPECT_EQ(problem(bad).status, 400);
+  EXPECT_THAT(problem(bad).detail, ::testing::StrEq("vendor.eds:20: DefaultValue '0x1FF' is not a valid UNSIGNED8: 0x1FF is above 255 (u8)"));
+  EXPECT_EQ(rig.settings.writes, 0);
+  EXPECT_TRUE(rig.audited("node configuration refused: alice: net 1 node 5: EDS/DCF vendor.eds uploaded: 400"));
+  EXPECT_EQ(problem(rig.run(NodeEdsWrite{5, "", ""})).detail, "node5.eds: empty: the body is the EDS or DCF file");
+
+  const auto good = rig.run(NodeEdsWrite{5, kGoodEds, ""});
+  ASSERT_TRUE(std::holds_alternative<NodeConfigView>(good));
+  EXPECT_EQ(rig.settings.product, "IO") << "the parsed description is handed on";
+  EXPECT_EQ(rig.settings.eds_text, kGoodEds) << "and the text to keep";
+  EXPECT_TRUE(rig.audited("EDS/DCF node5.eds uploaded (settings from state-dir)"));
+}
+
+}  // namespace
+}  // namespace gateway::core
