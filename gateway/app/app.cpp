@@ -378,9 +378,9 @@ canopen::can::MemoryBus* App::simulated_bus(std::uint32_t net_number) {
   return n == nullptr ? nullptr : n->link.simulated_bus();
 }
 
-trace::NetworkTrace* App::frame_tap(std::uint32_t net_number) {
+std::shared_ptr<trace::NetworkTrace> App::frame_tap(std::uint32_t net_number) {
   Net* n = net(net_number);
-  return n ? n->tap.get() : nullptr;
+  return n ? n->tap : nullptr;
 }
 
 std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_number) const {

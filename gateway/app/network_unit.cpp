@@ -58,7 +58,7 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
   ts.own_node_id = cfg.node_id;
   ts.bitrate = cfg.bitrate;
   ts.capture = {std::chrono::seconds(cfg.capture.ring_seconds), static_cast<std::size_t>(cfg.capture.max_bytes)};
-  tap = std::make_unique<trace::NetworkTrace>(std::move(ts), std::chrono::steady_clock::now());
+  tap = std::make_shared<trace::NetworkTrace>(std::move(ts), std::chrono::steady_clock::now());
   tapped = std::make_unique<trace::TappedChannel>(*link.channel, *tap);
   channel = tapped.get();
   // The gateway's own node: its dictionary says what it produces.

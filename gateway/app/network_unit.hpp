@@ -107,7 +107,7 @@ struct NetworkUnit {
   // The frame tap (issue 18): ring, bus load, trace clients. `channel` is
   // `tapped`, in front of link.channel, so every frame received and sent
   // passes the tap.
-  std::unique_ptr<trace::NetworkTrace> tap;
+  std::shared_ptr<trace::NetworkTrace> tap;  // shared: trace clients hold it weakly
   std::unique_ptr<trace::TappedChannel> tapped;
   canopen::can::Channel* channel = nullptr;  // tapped, in front of link.channel
   std::optional<canopen::od::ObjectDictionary> own_od;
