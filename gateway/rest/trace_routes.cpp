@@ -50,7 +50,7 @@ class TraceSession final : public http::StreamSource, public std::enable_shared_
   }
 
   std::shared_ptr<const std::string> next() override {
-    if (queue_.empty()) return nullptr;
+    if (queue_.empty()) return queue_.take_lost();  // caught up: how many it missed
     return queue_.pop();
   }
 

@@ -127,6 +127,13 @@ void TraceQueue::push_control(std::string text) {
   items_.push_back(std::make_shared<const std::string>(std::move(text)));
 }
 
+Message TraceQueue::take_lost() {
+  if (lost_pending_ == 0) return nullptr;
+  auto m = std::make_shared<const std::string>("{\"lost\":" + std::to_string(lost_pending_) + "}");
+  lost_pending_ = 0;
+  return m;
+}
+
 Message TraceQueue::pop() {
   Message m = std::move(items_.front());
   items_.pop_front();

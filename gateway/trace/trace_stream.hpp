@@ -43,10 +43,11 @@ class IdFilter {
 };
 
 // Bounded queue of one client. A frame that does not fit (max_messages or
-// max_bytes reached) is dropped and counted; the next frame that fits is
-// preceded by {"lost": N}, N the frames dropped since the last such
-// message, so the client sees where the gap is and how big. Control
-// messages (filter replies) are always queued.
+// max_bytes reached) is dropped and counted. The client is told
+// {"lost": N}, N the frames dropped since the last such message, where the
+// gap is: before the next frame that fits, or when it has caught up (the
+// queue ran empty: take_lost()). Control messages (filter replies) are
+// always queued.
 class TraceQueue {
  public:
   struct Limits {
@@ -62,6 +63,9 @@ class TraceQueue {
   std::size_t size() const { return items_.size(); }
   // The oldest message. Precondition: !empty().
   Message pop();
+  // With the queue empty: {"lost": N} for frames lost since the last
+  // report, once; null when none were.
+  Message take_lost();
   std::uint64_t lost() const { return lost_total_; }
 
  private:

@@ -74,6 +74,20 @@ TEST(TraceQueue, SlowClientToldHowManyItLost) {
   EXPECT_TRUE(q.empty());
   q.push_frame(msg(11));
   EXPECT_EQ(*q.pop(), "frame 11");  // no second lost message
+  EXPECT_EQ(q.take_lost(), nullptr);
+}
+
+// Caught up (queue empty) after losing frames: told at once, not only
+// when the next frame comes.
+TEST(TraceQueue, CaughtUpClientToldWithoutWaitingForAFrame) {
+  TraceQueue q({2, 1u << 20});
+  for (int i = 0; i < 5; ++i) q.push_frame(std::make_shared<const std::string>("f"));
+  q.pop();
+  q.pop();
+  ASSERT_TRUE(q.empty());
+  EXPECT_EQ(*q.take_lost(), R"({"lost":3})");
+  EXPECT_EQ(q.take_lost(), nullptr);
+  EXPECT_EQ(q.lost(), 3u);
 }
 
 TEST(TraceQueue, BoundedByBytesToo) {
