@@ -202,6 +202,11 @@ struct App::CoreNetworks final : core::Networks {
   }
 };
 
+namespace {
+constexpr std::string_view kBusLoadHelp =
+    "CAN bus load per network in percent of the configured bit rate over the window (worst-case bit stuffing).";
+}  // namespace
+
 App::App(boost::asio::io_context& io, Config config, Logger& log, Composition networks)
     : io_(io),
       config_(std::move(config)),
@@ -235,6 +240,22 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
   metrics::register_network_families(metrics_);
   for (const auto& n : nets_)
     register_network_metrics(metrics_, cache_, n->number, [c = n->channel] { return c; });
+  // Bus load per network (issue 18): a series only where the bit rate is
+  // configured; without one there is no honest number.
+  metrics_.family("canopen_gateway_bus_load_percent", kBusLoadHelp, metrics::MetricType::Gauge);
+  for (const auto& n : nets_) {
+    if (n->cfg.bitrate == 0) continue;
+    for (const int seconds : {1, 10}) {
+      metrics_.gauge_fn("canopen_gateway_bus_load_percent", kBusLoadHelp,
+                        {{"network", std::to_string(n->number)},
+                         {"interface", n->cfg.simulated ? std::string("demo") : n->cfg.interface},
+                         {"window", std::to_string(seconds) + "s"}},
+                        [t = n->tap.get(), seconds] {
+                          return metrics::Value(
+                              t->load().percent(std::chrono::seconds(seconds), std::chrono::steady_clock::now()).value_or(0.0));
+                        });
+    }
+  }
   core::register_metrics(metrics_, core_.counters());
   register_metrics(metrics_, pipeline_);
   if (config_.mqtt.enabled) {
@@ -372,6 +393,11 @@ bool App::set_simulated_link(std::uint32_t net_number, bool up) {
 canopen::can::MemoryBus* App::simulated_bus(std::uint32_t net_number) {
   Net* n = net(net_number);
   return n == nullptr ? nullptr : n->link.simulated_bus();
+}
+
+std::shared_ptr<trace::NetworkTrace> App::frame_tap(std::uint32_t net_number) {
+  Net* n = net(net_number);
+  return n ? n->tap : nullptr;
 }
 
 std::optional<canopen::can::ChannelStats> App::channel_stats(std::uint32_t net_number) const {

@@ -70,6 +70,10 @@ namespace gateway::sparkplug {
 class EdgeClient;
 }
 
+namespace gateway::trace {
+class NetworkTrace;
+}
+
 namespace gateway {
 
 class MqttOutput;
@@ -138,6 +142,12 @@ class App {
   // The bus state of network `net` as its channel reports it now; nullopt
   // for an unknown network.
   std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const;
+  // The frame tap of network `net` (issue 18: trace WebSocket, capture
+  // ring, bus load); null for an unknown network. Holders that may outlive
+  // the App (WebSocket sessions) keep it as a weak_ptr.
+  std::shared_ptr<trace::NetworkTrace> frame_tap(std::uint32_t net);
+  // The io_context everything runs on (timers of request handlers).
+  boost::asio::io_context& io() { return io_; }
   // Frame counters of network `net`'s channel (for /metrics).
   std::optional<canopen::can::ChannelStats> channel_stats(std::uint32_t net) const;
   // The MQTT publisher (e.g. tests: its counters); nullptr when MQTT is off

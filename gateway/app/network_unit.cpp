@@ -52,8 +52,15 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
       label("net " + std::to_string(net_number) + " " + (cfg.simulated ? std::string("demo") : cfg.interface)),
       log(logger),
       link(std::move(opened)),
-      channel(link.channel),
       descriptions(std::move(descs)) {
+  trace::TraceSettings ts;
+  ts.interface = cfg.simulated ? "demo" + std::to_string(net_number) : cfg.interface;
+  ts.own_node_id = cfg.node_id;
+  ts.bitrate = cfg.bitrate;
+  ts.capture = {std::chrono::seconds(cfg.capture.ring_seconds), static_cast<std::size_t>(cfg.capture.max_bytes)};
+  tap = std::make_shared<trace::NetworkTrace>(std::move(ts), std::chrono::steady_clock::now());
+  tapped = std::make_unique<trace::TappedChannel>(*link.channel, *tap);
+  channel = tapped.get();
   // The gateway's own node: its dictionary says what it produces.
   canopen::od::GatewayIdentity identity;
   identity.software_version = CANOPEN_GATEWAY_VERSION;

@@ -34,6 +34,8 @@
 #include "config.hpp"
 #include "log.hpp"
 #include "seq_store.hpp"
+#include "trace/network_trace.hpp"
+#include "trace/tapped_channel.hpp"
 
 namespace canopen::socketcan {
 class SocketCanChannel;
@@ -111,7 +113,12 @@ struct NetworkUnit {
   std::string label;  // "net 1 vcan0"
   Logger& log;
   NetworkLink link;
-  canopen::can::Channel* channel = nullptr;  // link.channel
+  // The frame tap (issue 18): ring, bus load, trace clients. `channel` is
+  // `tapped`, in front of link.channel, so every frame received and sent
+  // passes the tap.
+  std::shared_ptr<trace::NetworkTrace> tap;  // shared: trace clients hold it weakly
+  std::unique_ptr<trace::TappedChannel> tapped;
+  canopen::can::Channel* channel = nullptr;  // tapped, in front of link.channel
   std::optional<canopen::od::ObjectDictionary> own_od;
   std::unique_ptr<canopen::LocalNode> local;
   // std::map: stable addresses (the boot configurator keeps DCF pointers).

@@ -158,7 +158,8 @@ std::optional<std::string> bearer_token(const http::Request& req) {
     while (!v.empty() && v.back() == ' ') v.remove_suffix(1);
     return std::string(v);
   }
-  if (req.route == "/api/v1/events")
+  // WebSockets only: browsers cannot set the header there.
+  if (req.route == "/api/v1/events" || req.route == "/api/v1/networks/{net}/trace")
     if (auto q = req.query_param("access_token")) return std::string(*q);
   return std::nullopt;
 }

@@ -247,7 +247,7 @@ void parse_lss(const At& a, NetworkConfig& net) {
 void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id, const std::string& dir) {
   a.expect_map(
       {"interface", "simulated", "simulation", "bitrate", "node-id", "heartbeat-ms", "sync", "time", "boot", "nodes",
-       "lss"});
+       "lss", "capture"});
   auto iface = a.get("interface");
   if (auto sim = a.get("simulated")) net.simulated = sim->boolean();
   if (net.simulated) {
@@ -299,6 +299,12 @@ void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id
     net.nodes.push_back(std::move(n));
   }
   if (auto l = a.get("lss")) parse_lss(*l, net);
+  if (auto c = a.get("capture")) {
+    c->expect_map({"ring-seconds", "max-bytes"});
+    if (auto v = c->get("ring-seconds")) net.capture.ring_seconds = static_cast<std::uint32_t>(v->integer(0, 3600));
+    // at least a few hundred frames; at most 1 GiB per network
+    if (auto v = c->get("max-bytes")) net.capture.max_bytes = v->integer(65536, std::uint64_t{1} << 30);
+  }
 }
 
 Role parse_role(const At& a, bool allow_none = false) {

@@ -118,6 +118,13 @@ struct NetworkConfig {
   // lss: {assign: [...]}: at start-up each listed device is selected, given
   // its node-ID (and stored); an absent device is logged, never fatal.
   std::vector<LssAssignConfig> lss_assign;
+  // capture: {ring-seconds, max-bytes}: the ring of the network's last
+  // frames that GET .../capture?last= reads (issue 18). Memory grows with
+  // the traffic up to max-bytes; ring-seconds 0 turns the ring off.
+  struct Capture {
+    std::uint32_t ring_seconds = 60;
+    std::uint64_t max_bytes = 16u << 20;
+  } capture;
 };
 
 // The MQTT and HTTP settings are the components' own structs

@@ -24,6 +24,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -64,6 +65,33 @@ struct HttpStats {
   std::map<int, std::uint64_t> responses_by_status;  // 200 -> n, 404 -> n ...
 };
 
+// A server-push WebSocket endpoint other than /api/v1/events (e.g. the bus
+// trace): the session pulls text messages from its source whenever it can
+// write, so the source decides what to queue and drop. All calls on the
+// io_context thread.
+class StreamSource {
+ public:
+  virtual ~StreamSource() = default;
+  // The next message to send; null when nothing is queued now.
+  virtual std::shared_ptr<const std::string> next() = 0;
+  // A text message from the client (binary ones are refused by the server).
+  virtual void on_message(std::string_view text) = 0;
+  // The connection is gone; called once. The source MUST NOT call wake after it.
+  virtual void on_close() {}
+  // Set by the server when the session opens: call it when next() has
+  // something again (never from inside next()).
+  std::function<void()> wake;
+};
+
+// A stream route's answer to an upgrade request (after the authorizer
+// allowed it): a source to serve, or a refusal (e.g. 404 unknown network,
+// 503 too many clients).
+struct StreamAccept {
+  std::shared_ptr<StreamSource> source;
+  Response refusal;
+};
+using StreamHandler = std::function<StreamAccept(const Request&)>;
+
 class HttpServer {
  public:
   // Loads the TLS certificate and key when configured (throws
@@ -78,7 +106,10 @@ class HttpServer {
   // std::invalid_argument on a bad or duplicate pattern. The path
   // /api/v1/events is the server's own (WebSocket).
   void add_route(std::string method, std::string_view pattern, Handler handler);
-  // Every (method, pattern) added, in the order added.
+  // Adds a WebSocket route GET `pattern` (router.hpp patterns) served by
+  // the sources `handler` gives. A plain GET on it answers 426.
+  void add_stream_route(std::string_view pattern, StreamHandler handler);
+  // Every (method, pattern) added, in the order added (stream routes after the others).
   std::vector<std::pair<std::string, std::string>> routes() const;
   // Replaces the security hook (default: allow everything).
   void set_authorizer(Authorizer authorizer);

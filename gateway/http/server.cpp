@@ -115,6 +115,10 @@ struct HttpServer::Impl : std::enable_shared_from_this<HttpServer::Impl> {
   tcp::acceptor acceptor;
   net::steady_timer accept_timer;  // back-off after EMFILE and the like
   Router router;
+  // WebSocket routes served by a StreamSource: matched by stream_router
+  // (whose handlers are never called), answered by streams[pattern].
+  Router stream_router;
+  std::map<std::string, StreamHandler, std::less<>> streams;
   Authorizer authorizer;
   Counters counters;
   std::atomic<std::uint16_t> port{0};
@@ -185,6 +189,7 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
     impl_->counters.active.fetch_add(1, std::memory_order_relaxed);
   }
   ~WsClient() override {
+    release_source();
     impl_->connections.erase(id_);
     impl_->ws_clients.erase(id_);
     if (registered_) impl_->counters.ws_clients.fetch_sub(1, std::memory_order_relaxed);
@@ -202,21 +207,36 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
 
   void shutdown() override { begin_close(websocket::close_reason(websocket::close_code::going_away, "server stopping")); }
 
+  // Serve `source` instead of the event stream (before run()).
+  void set_source(std::shared_ptr<StreamSource> source) { source_ = std::move(source); }
+
  protected:
   // Called once the handshake succeeded.
   void opened() {
     open_ = true;
     registered_ = true;
     impl_->connections.emplace(id_, weak_from_this());
-    impl_->ws_clients.emplace(id_, weak_from_this());
+    if (source_) {
+      source_->wake = [w = weak_from_this()] {
+        if (auto self = w.lock()) self->maybe_write();
+      };
+    } else {
+      impl_->ws_clients.emplace(id_, weak_from_this());  // publish() reaches it
+    }
     impl_->counters.ws_clients.fetch_add(1, std::memory_order_relaxed);
     if (binary_) impl_->counters.ws_binary_clients.fetch_add(1, std::memory_order_relaxed);
     impl_->counters.ws_total.fetch_add(1, std::memory_order_relaxed);
     impl_->counters.count_status(101);
     impl_->debug("ws client " + peer_ + " connected" + (binary_ ? " (protobuf)" : ""));
+    if (source_) maybe_write();  // what the source queued during the handshake
   }
 
   void on_text_message(std::string_view text) {
+    if (source_) {
+      source_->on_message(text);
+      maybe_write();
+      return;
+    }
     std::string error;
     std::string reply;
     if (filter_.parse(text, error)) {
@@ -227,6 +247,11 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
     push(SendQueue::Item{nullptr, std::move(reply), false});
   }
   void on_binary_message() {
+    if (source_) {
+      source_->on_message("binary frame");  // not JSON: the source answers with its error
+      maybe_write();
+      return;
+    }
     push(SendQueue::Item{
         nullptr, "{\"error\":" + Response::problem(400, "filter messages are JSON text frames").body + "}", false});
   }
@@ -246,6 +271,13 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
   }
 
   void maybe_write() {
+    if (source_ && !writing_ && !closing_ && open_) {
+      source_msg_ = source_->next();
+      if (!source_msg_) return;
+      writing_ = true;
+      start_write(*source_msg_, false);
+      return;
+    }
     if (writing_ || closing_ || queue_.empty()) return;
     current_ = queue_.pop();
     writing_ = true;
@@ -255,6 +287,7 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
   void on_write(error_code ec) {
     writing_ = false;
     current_ = {};
+    source_msg_.reset();
     if (ec) {
       closed();
       return;
@@ -267,6 +300,7 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
     if (closing_) return;
     closing_ = true;
     queue_.clear();
+    release_source();
     if (!open_) {
       force_close();
       return;
@@ -278,10 +312,18 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
   void closed() {
     closing_ = true;
     queue_.clear();
+    release_source();
     if (open_) {
       open_ = false;
       impl_->ws_clients.erase(id_);
     }
+  }
+
+  void release_source() {
+    if (!source_ || source_released_) return;
+    source_released_ = true;
+    source_->wake = nullptr;
+    source_->on_close();
   }
 
   virtual void start_write(std::string_view payload, bool binary) = 0;
@@ -296,6 +338,9 @@ class WsClient : public Closable, public std::enable_shared_from_this<WsClient> 
   SendQueue queue_;
   EventFilter filter_;
   SendQueue::Item current_;  // being written; kept alive for the write
+  std::shared_ptr<StreamSource> source_;          // a stream route's client: messages from here
+  std::shared_ptr<const std::string> source_msg_;  // being written
+  bool source_released_ = false;
   bool open_ = false;
   bool closing_ = false;
   bool writing_ = false;
@@ -526,6 +571,18 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     for (auto p : url.params(boost::urls::encoding_opts(true, false, false)))
       req->query.emplace_back(p.key, p.has_value ? p.value : std::string());
 
+    if (auto sm = impl_->stream_router.match(req->method, segments); sm.kind == Router::Match::Kind::Found) {
+      if (!websocket::is_upgrade(breq)) {
+        Response r = Response::problem(426, "this path is a WebSocket endpoint");
+        r.headers.emplace_back("Upgrade", "websocket");
+        send(std::move(r));
+        return;
+      }
+      req->params = std::move(sm.params);
+      req->route = std::move(sm.pattern);
+      handle_stream_upgrade(std::move(breq), *req);
+      return;
+    }
     if (req->path == kEventsPath) {
       if (!websocket::is_upgrade(breq)) {
         Response r = Response::problem(426, "this path is a WebSocket endpoint");
@@ -656,7 +713,32 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
       send(Response::problem(503, "server stopping"));
       return;
     }
-    upgrade(std::move(breq), binary);
+    upgrade(std::move(breq), binary, nullptr);
+  }
+
+  void handle_stream_upgrade(BeastRequest&& breq, Request& req) {
+    keep_alive_ = false;
+    if (auto denied = authorize(req)) {
+      send(std::move(*denied));
+      return;
+    }
+    if (impl_->stopped) {
+      send(Response::problem(503, "server stopping"));
+      return;
+    }
+    StreamAccept accept;
+    try {
+      accept = impl_->streams.find(req.route)->second(req);
+    } catch (const std::exception& e) {
+      impl_->debug(std::string("stream handler threw: ") + e.what());
+      send(Response::problem(500, "internal error"));
+      return;
+    }
+    if (!accept.source) {
+      send(std::move(accept.refusal));
+      return;
+    }
+    upgrade(std::move(breq), false, std::move(accept.source));
   }
 
   // Builds the Beast response and hands it to the stream.
@@ -684,7 +766,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
   }
 
   virtual void write(BeastResponse&& res) = 0;
-  virtual void upgrade(BeastRequest&& req, bool binary) = 0;
+  virtual void upgrade(BeastRequest&& req, bool binary, std::shared_ptr<StreamSource> source) = 0;
 
   std::shared_ptr<HttpServer::Impl> impl_;
   SlotPtr slot_;
@@ -845,10 +927,11 @@ class HttpSession final : public Connection {
     });
   }
 
-  void upgrade(BeastRequest&& req, bool binary) override {
+  void upgrade(BeastRequest&& req, bool binary, std::shared_ptr<StreamSource> source) override {
     beast::get_lowest_layer(stream_).expires_never();
     upgraded_ = true;
     auto ws = std::make_shared<WsSession<Stream>>(impl_, slot_, std::move(stream_), binary, peer_);
+    if (source) ws->set_source(std::move(source));
     ws->run(std::move(req));
   }
 
@@ -1031,7 +1114,17 @@ std::size_t HttpServer::binary_clients() const {
   return static_cast<std::size_t>(impl_->counters.ws_binary_clients.load(std::memory_order_relaxed));
 }
 
-std::vector<std::pair<std::string, std::string>> HttpServer::routes() const { return impl_->router.list(); }
+void HttpServer::add_stream_route(std::string_view pattern, StreamHandler handler) {
+  if (pattern == kEventsPath) throw std::invalid_argument("route " + std::string(pattern) + " is the event stream's");
+  impl_->stream_router.add("GET", pattern, [](const Request&, Responder) {});
+  impl_->streams.emplace(std::string(pattern), std::move(handler));
+}
+
+std::vector<std::pair<std::string, std::string>> HttpServer::routes() const {
+  auto all = impl_->router.list();
+  for (auto& r : impl_->stream_router.list()) all.push_back(std::move(r));
+  return all;
+}
 
 void HttpServer::set_authorizer(Authorizer authorizer) { impl_->authorizer = std::move(authorizer); }
 

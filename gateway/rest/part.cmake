@@ -18,7 +18,8 @@ configure_file(${CMAKE_CURRENT_LIST_DIR}/openapi_document.cpp.in ${CMAKE_CURRENT
 add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp
   ${CMAKE_CURRENT_LIST_DIR}/api_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/trace_routes.cpp
   ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp)
 target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(gateway_rest PUBLIC gateway_app gateway_core gateway_http gateway_messages gateway_edstool
-                                   PRIVATE gateway_rest_parse gateway_metrics Boost::json canopen_json canopen_options)
+                                   PRIVATE gateway_rest_parse gateway_metrics gateway_trace Boost::json canopen_json canopen_options)

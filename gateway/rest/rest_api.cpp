@@ -23,6 +23,8 @@
 #include "request_codec.hpp"
 #include "rest_parse.hpp"
 #include "sparkplug/edge_client.hpp"
+#include "trace/network_trace.hpp"
+#include "trace_routes.hpp"
 
 namespace gateway {
 
@@ -239,6 +241,10 @@ void get_network(App& app, const Request& req, Responder respond) {
   if (auto s = app.own_state(net)) o["nodeState"] = std::string(canopen::to_string(*s));
   if (cfg.bitrate != 0) o["bitrate"] = cfg.bitrate;
   if (auto s = app.bus_state(net)) o["bus"] = std::string(canopen::can::to_string(*s));
+  if (auto tap = app.frame_tap(net)) {  // issue 18: bus load and the capture ring (trace_routes.hpp)
+    o["busLoad"] = bus_load_json(*tap);
+    o["capture"] = capture_json(*tap);
+  }
   const auto* info = app.cache().network(net);
   json::object counters;
   if (info != nullptr) {

@@ -34,7 +34,8 @@ TEST(Composition, ADemoNetworkIsOneUnitWhoseChannelIsTheSimulatedBus) {
   EXPECT_EQ(u.label, "net 1 demo");
   EXPECT_EQ(c.monitor, nullptr) << "no SocketCAN network, no link monitor";
   ASSERT_NE(u.link.memory_gateway, nullptr);
-  EXPECT_EQ(u.channel, u.link.memory_gateway.get()) << "the unit uses the gateway's end of the bus";
+  EXPECT_EQ(u.link.channel, u.link.memory_gateway.get()) << "the unit uses the gateway's end of the bus";
+  EXPECT_EQ(u.channel, u.tapped.get()) << "through the trace tap (issue 18), so every frame passes it";
   ASSERT_NE(u.link.simulator, nullptr);
   EXPECT_EQ(u.link.simulator->size(), demo_node_configs().size()) << "the demo devices on the other end";
   EXPECT_EQ(u.link.simulator->unconfigured(), 1U) << "and one that waits for LSS (issue 16, CiA 305)";

@@ -70,6 +70,8 @@ const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
                    "DataType=0x0006\nAccessType=rw\nDefaultValue=500\n"}},
     {{"GET", "/api/v1/openapi.json"}, {Role::None, ""}},
     {{"GET", "/metrics"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/capture"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/trace"}, {Role::Viewer, ""}},  // WebSocket
 };
 
 // Pattern -> a concrete path on the demo network (node 5, heartbeat 1017h).
@@ -153,6 +155,7 @@ TEST(SecurityMatrix, EveryRouteByRole) {
   const std::optional<Role> callers[] = {std::nullopt, Role::Viewer, Role::Operator, Role::Admin};
   for (const auto& [method, pattern] : routes) {
     Expect e{Role::None, ""};
+    const bool ws = pattern == "/api/v1/events" || pattern == "/api/v1/networks/{net}/trace";
     if (pattern == "/api/v1/events") {
       e.need = Role::Viewer;
     } else if (pattern != "/") {
@@ -164,10 +167,9 @@ TEST(SecurityMatrix, EveryRouteByRole) {
     for (const auto& caller : callers) {
       SCOPED_TRACE(method + " " + path + " as " + who(caller));
       const bool allowed = e.need == Role::None || (caller && allows(*caller, e.need));
-      HttpReply r = pattern == "/api/v1/events" ? rig.as(caller, method, path, {}, kUpgrade)
-                                                : rig.as(caller, method, path, e.body);
+      HttpReply r = ws ? rig.as(caller, method, path, {}, kUpgrade) : rig.as(caller, method, path, e.body);
       if (allowed) {
-        if (pattern == "/api/v1/events")
+        if (ws)
           EXPECT_EQ(r.status, 101) << r.body;
         else
           EXPECT_TRUE(r.status >= 200 && r.status < 300) << r.status << " " << r.body;

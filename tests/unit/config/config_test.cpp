@@ -183,7 +183,7 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
   EXPECT_EQ(config_error("networks:\n  - interface: can0\n    bitrat: 5\n"),
             "gw.yaml:3: networks[0].bitrat: unknown key (known here: interface, simulated, simulation, bitrate, node-id, "
             "heartbeat-ms, "
-            "sync, time, boot, nodes, lss)");
+            "sync, time, boot, nodes, lss, capture)");
   EXPECT_THAT(config_error("networks:\n  - bitrate: 500000\n"), HasSubstr("networks[0]: missing key 'interface'"));
   EXPECT_THAT(config_error("networks:\n  - interface: can0\n    nodes:\n      - id: 5\n        eds: /nope.eds\n"),
               HasSubstr("gw.yaml:5: networks[0].nodes[0].eds: file '/nope.eds' not found"));
@@ -956,4 +956,23 @@ TEST(Config, StateDirectoryFromSystemd) {
 }
 
 }  // namespace
+// capture: {ring-seconds, max-bytes} per network (issue 18, contract "Bus
+// trace and capture"): defaults 60 s and 16 MiB; bad values are refused.
+TEST(Config, CaptureRingPerNetwork) {
+  const auto c = parse_config(
+      "networks:\n  - interface: can0\n    capture: {ring-seconds: 10, max-bytes: 1048576}\n  - interface: can1\n",
+      "gw.yaml");
+  ASSERT_EQ(c.networks.size(), 2u);
+  EXPECT_EQ(c.networks[0].capture.ring_seconds, 10u);
+  EXPECT_EQ(c.networks[0].capture.max_bytes, 1048576u);
+  EXPECT_EQ(c.networks[1].capture.ring_seconds, 60u);
+  EXPECT_EQ(c.networks[1].capture.max_bytes, 16u << 20);
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    capture: {ring-seconds: 4000}\n"),
+              HasSubstr("gw.yaml:3: networks[0].capture.ring-seconds: 4000 is out of range 0..3600"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    capture: {max-bytes: 10}\n"),
+              HasSubstr("networks[0].capture.max-bytes: 10 is out of range 65536..1073741824"));
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    capture: {seconds: 4}\n"),
+              HasSubstr("networks[0].capture.seconds: unknown key"));
+}
+
 }  // namespace gateway

@@ -26,6 +26,7 @@
 #include <boost/json/value.hpp>
 #include <boost/json/value_to.hpp>
 #include <atomic>
+#include <deque>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -52,6 +53,8 @@ using gateway::http::HttpServer;
 using gateway::http::Request;
 using gateway::http::Responder;
 using gateway::http::Response;
+using gateway::http::StreamAccept;
+using gateway::http::StreamSource;
 
 namespace {
 
@@ -1020,6 +1023,70 @@ TEST(WebSocket, StalledClientDoesNotHoldUpOthers) {
   EXPECT_GT(st.ws_messages_dropped, 0u);
   EXPECT_EQ(st.ws_clients_closed_slow, 1u);
   EXPECT_TRUE(ts.wait_until([&] { return ts.server().stats().ws_clients == 1; }));
+}
+
+// A stream route (HttpServer::add_stream_route, used by the bus trace): a
+// plain GET is 426; the handler may refuse with its own answer; an
+// accepted session writes what its source queues, in order, whenever the
+// source wakes it, hands client messages to the source and tells it once
+// when the connection is gone.
+TEST(WebSocket, StreamRouteServesItsSource) {
+  struct Source : StreamSource {
+    std::deque<std::string> queued;
+    std::vector<std::string> received;
+    int closes = 0;
+    std::shared_ptr<const std::string> next() override {
+      if (queued.empty()) return nullptr;
+      auto m = std::make_shared<const std::string>(queued.front());
+      queued.pop_front();
+      return m;
+    }
+    void on_message(std::string_view text) override {
+      received.emplace_back(text);
+      queued.push_back("echo " + std::string(text));
+    }
+    void on_close() override { ++closes; }
+  };
+  auto source = std::make_shared<Source>();
+  source->queued = {"one", "two"};  // queued before the handshake
+  TestServer ts(quick_config(), [&](HttpServer& s) {
+    s.add_stream_route("/s/{name}", [&](const Request& req) {
+      StreamAccept a;
+      if (req.param("name") == "ok") a.source = source;
+      else a.refusal = Response::problem(404, "no such stream");
+      return a;
+    });
+  });
+  EXPECT_EQ(ts.server().routes().back(), (std::pair<std::string, std::string>{"GET", "/s/{name}"}));
+  HttpClient plain(ts.port());
+  EXPECT_EQ(plain.request(bhttp::verb::get, "/s/ok").result_int(), 426u);
+  WsClient refused(ts.port(), "/s/nope");
+  EXPECT_TRUE(refused.ec);
+  EXPECT_EQ(refused.response.result_int(), 404u);
+
+  WsClient c(ts.port(), "/s/ok");
+  ASSERT_FALSE(c.ec) << c.ec.message();
+  std::string m;
+  ASSERT_FALSE(c.read(m));
+  EXPECT_EQ(m, "one");
+  ASSERT_FALSE(c.read(m));
+  EXPECT_EQ(m, "two");
+  ts.on_io([&] {
+    source->queued.push_back("three");
+    source->wake();
+  });
+  ASSERT_FALSE(c.read(m));
+  EXPECT_EQ(m, "three");
+  ASSERT_FALSE(c.send("hello"));
+  ASSERT_FALSE(c.read(m));
+  EXPECT_EQ(m, "echo hello");
+  c.ws.close(websocket::close_code::normal);
+  EXPECT_TRUE(ts.wait_until([&] {
+    int closes = 0;
+    ts.on_io([&] { closes = source->closes; });
+    return closes == 1;
+  }));
+  ts.on_io([&] { EXPECT_EQ(source->received, std::vector<std::string>{"hello"}); });
 }
 
 TEST(WebSocket, PingKeepAlive) {

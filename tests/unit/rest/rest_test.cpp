@@ -483,7 +483,7 @@ TEST(Rest, MetricsFamiliesInTheirOrder) {
   const std::vector<std::string> expected = {
       "canopen_gateway_build_info", "canopen_gateway_can_frames_total", "canopen_gateway_can_frames_dropped_total",
       "canopen_gateway_can_error_frames_total", "canopen_gateway_can_reopens_total", "canopen_gateway_bus_state",
-      "canopen_gateway_network_events_total", "canopen_gateway_sdo_requests_total", "canopen_gateway_sdo_aborts_total",
+      "canopen_gateway_network_events_total", "canopen_gateway_bus_load_percent", "canopen_gateway_sdo_requests_total", "canopen_gateway_sdo_aborts_total",
       "canopen_gateway_sdo_timeouts_total", "canopen_gateway_nmt_commands_total", "canopen_gateway_sdo_latency_seconds",
       "canopen_gateway_request_auth_failures_total", "canopen_gateway_requests_limited_total",
       "canopen_gateway_lss_operations_total", "canopen_gateway_lss_node_ids_assigned_total",

@@ -1,0 +1,231 @@
+#include "trace_routes.hpp"
+
+#include <boost/asio/steady_timer.hpp>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <memory>
+
+#include "core/format.hpp"
+#include "trace/network_trace.hpp"
+
+namespace gateway {
+
+namespace {
+
+using http::Request;
+using http::Responder;
+using http::Response;
+using trace::NetworkTrace;
+
+// The network of the path: its tap, or the problem to answer.
+std::shared_ptr<NetworkTrace> path_tap(App& app, const Request& req, Response& problem) {
+  const auto n = core::parse_decimal(req.param("net"));
+  if (!n) {
+    problem = Response::problem(400, "network must be a decimal number, not '" + std::string(req.param("net")) + "'");
+    return nullptr;
+  }
+  auto tap = app.frame_tap(*n);
+  if (!tap)
+    problem = Response::problem(404, "network " + std::to_string(*n) + " is not configured (networks are 1.." +
+                                         std::to_string(app.config().networks.size()) + ")");
+  return tap;
+}
+
+// One trace WebSocket client: its filter and bounded queue, fed by the tap.
+class TraceSession final : public http::StreamSource, public std::enable_shared_from_this<TraceSession> {
+ public:
+  explicit TraceSession(std::weak_ptr<NetworkTrace> tap) : tap_(std::move(tap)), queue_({}) {}
+  ~TraceSession() override { on_close(); }
+
+  void attach() {
+    auto tap = tap_.lock();
+    if (!tap) return;
+    id_ = tap->add_client({[this](std::uint32_t id) { return filter_.matches(id); },
+                           [this](const trace::Message& m) {
+                             // Queued or dropped and counted; the bus path never waits.
+                             queue_.push_frame(m);
+                             if (wake) wake();
+                           }});
+  }
+
+  std::shared_ptr<const std::string> next() override {
+    if (queue_.empty()) return queue_.take_lost();  // caught up: how many it missed
+    return queue_.pop();
+  }
+
+  void on_message(std::string_view text) override {
+    std::string error;
+    if (filter_.parse(text, error)) {
+      queue_.push_control("{\"subscribed\":" + filter_.to_json() + "}");
+    } else {
+      queue_.push_control("{\"error\":" + Response::problem(400, error).body + "}");
+    }
+  }
+
+  void on_close() override {
+    if (id_ == 0) return;
+    if (auto tap = tap_.lock()) tap->remove(id_);
+    id_ = 0;
+  }
+
+ private:
+  std::weak_ptr<NetworkTrace> tap_;
+  trace::IdFilter filter_;
+  trace::TraceQueue queue_;
+  std::uint64_t id_ = 0;
+};
+
+http::StreamAccept trace_stream(App& app, const Request& req) {
+  http::StreamAccept out;
+  auto tap = path_tap(app, req, out.refusal);
+  if (!tap) return out;
+  if (tap->clients() >= kMaxTraceClients) {
+    out.refusal = Response::problem(503, "network " + std::string(req.param("net")) + " already has " +
+                                             std::to_string(kMaxTraceClients) + " trace clients");
+    out.refusal.headers.emplace_back("Retry-After", "5");
+    return out;
+  }
+  auto session = std::make_shared<TraceSession>(tap);
+  session->attach();
+  out.source = std::move(session);
+  return out;
+}
+
+// A number of seconds in the query: 1..max.
+std::optional<std::uint32_t> query_seconds(std::string_view name, std::string_view text, std::uint32_t max,
+                                           std::string& error) {
+  const auto n = core::parse_decimal(text);
+  if (!n || *n == 0 || *n > max) {
+    error = std::string(name) + " must be a number of seconds 1.." + std::to_string(max) + ", not '" +
+            std::string(text) + "'";
+    return std::nullopt;
+  }
+  return n;
+}
+
+std::string utc_stamp(trace::WallTime t) {
+  const std::time_t secs = std::chrono::system_clock::to_time_t(t);
+  std::tm tm{};
+  gmtime_r(&secs, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y%m%dT%H%M%SZ", &tm);
+  return buf;
+}
+
+Response capture_file(const NetworkTrace& tap, const std::vector<trace::Traced>& frames, bool candump,
+                      const std::string& net) {
+  Response r;
+  r.status = 200;
+  const auto& iface = tap.settings().interface;
+  std::string name = "canopen-net" + net + "-" + utc_stamp(std::chrono::system_clock::now());
+  if (candump) {
+    r.content_type = "text/plain; charset=utf-8";
+    r.body.reserve(frames.size() * 40);
+    for (const auto& t : frames) r.body += trace::candump_line(t, iface);
+    name += ".log";
+  } else {
+    r.content_type = "application/x-pcapng";
+    r.body = trace::pcapng::file(frames, iface, "canopen-gateway");
+    name += ".pcapng";
+  }
+  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + name + "\"");
+  return r;
+}
+
+void capture(App& app, const Request& req, Responder respond) {
+  Response problem;
+  auto tap = path_tap(app, req, problem);
+  if (!tap) return respond(std::move(problem));
+  bool candump = false;
+  if (auto f = req.query_param("format")) {
+    if (*f == "candump") candump = true;
+    else if (*f != "pcapng") return respond(Response::problem(400, "format must be pcapng or candump, not '" + std::string(*f) + "'"));
+  }
+  const auto last = req.query_param("last");
+  const auto seconds = req.query_param("seconds");
+  if (last && seconds) return respond(Response::problem(400, "give last or seconds, not both"));
+  std::string error;
+  const std::string net(req.param("net"));
+  if (!seconds) {
+    // The ring: the last S seconds (all it holds without last=).
+    std::uint32_t s = static_cast<std::uint32_t>(tap->ring().limits().ring.count());
+    if (last) {
+      const auto n = query_seconds("last", *last, 86400, error);
+      if (!n) return respond(Response::problem(400, error));
+      s = *n;
+    }
+    const auto frames = tap->ring().since(std::chrono::system_clock::now() - std::chrono::seconds(s));
+    return respond(capture_file(*tap, frames, candump, net));
+  }
+  // The next S seconds: collected, then sent in one response, so S stays
+  // below the server's handler timeout; bounded by the ring's max-bytes.
+  const auto handler_limit = std::chrono::duration_cast<std::chrono::seconds>(app.config().http.handler_timeout);
+  const auto max_s = static_cast<std::uint32_t>(std::max<std::int64_t>(1, handler_limit.count() - 2));
+  const auto n = query_seconds("seconds", *seconds, max_s, error);
+  if (!n) return respond(Response::problem(400, error));
+  struct Recording {
+    std::vector<trace::Traced> frames;
+    std::size_t bytes = 0;
+    std::uint64_t id = 0;
+    boost::asio::steady_timer timer;
+    explicit Recording(boost::asio::io_context& io) : timer(io) {}
+  };
+  auto rec = std::make_shared<Recording>(app.io());
+  const std::size_t max_bytes = tap->ring().limits().max_bytes;
+  rec->id = tap->add_recorder([r = rec.get(), max_bytes](const trace::Traced& t) {
+    const std::size_t cost = trace::CaptureRing::record_bytes(t.frame);
+    if (r->bytes + cost > max_bytes) return;  // full: the capture ends early in content, not in time
+    r->bytes += cost;
+    r->frames.push_back(t);
+  });
+  rec->timer.expires_after(std::chrono::seconds(*n));
+  rec->timer.async_wait([rec, weak = std::weak_ptr<NetworkTrace>(tap), candump, net,
+                         respond = std::move(respond)](const boost::system::error_code&) {
+    auto t = weak.lock();
+    if (!t) return respond(Response::problem(503, "the network went away during the capture"));
+    t->remove(rec->id);
+    respond(capture_file(*t, rec->frames, candump, net));
+  });
+}
+
+}  // namespace
+
+boost::json::object bus_load_json(const NetworkTrace& tap) {
+  boost::json::object o;
+  const auto now = std::chrono::steady_clock::now();
+  const auto& load = tap.load();
+  auto pct = [&](std::chrono::seconds w) -> boost::json::value {
+    const auto p = load.percent(w, now);
+    if (!p) return nullptr;
+    return std::round(*p * 10.0) / 10.0;
+  };
+  o["percent1s"] = pct(std::chrono::seconds(1));
+  o["percent10s"] = pct(std::chrono::seconds(10));
+  if (load.bitrate() != 0) {
+    o["bitrate"] = load.bitrate();
+  } else {
+    o["bitrate"] = nullptr;
+    o["reason"] = "no bitrate configured for this network";
+  }
+  return o;
+}
+
+boost::json::object capture_json(const NetworkTrace& tap) {
+  boost::json::object o;
+  const auto& ring = tap.ring();
+  o["ringSeconds"] = ring.limits().ring.count();
+  o["maxBytes"] = ring.limits().max_bytes;
+  o["frames"] = ring.size();
+  o["bytes"] = ring.bytes();
+  return o;
+}
+
+void register_trace_routes(http::HttpServer& server, App& app) {
+  App* a = &app;
+  server.add_stream_route("/api/v1/networks/{net}/trace", [a](const Request& req) { return trace_stream(*a, req); });
+  server.add_route("GET", "/api/v1/networks/{net}/capture",
+                   [a](const Request& req, Responder respond) { capture(*a, req, std::move(respond)); });
+}
+
+}  // namespace gateway

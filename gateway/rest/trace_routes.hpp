@@ -1,0 +1,38 @@
+// The bus trace and capture routes (../shared/api-contract.md, "Bus trace
+// and capture"; role viewer), answered from each network's frame tap
+// (trace/network_trace.hpp):
+//
+//   GET /api/v1/networks/{net}/trace    WebSocket: one JSON message per frame
+//                                       received or sent (trace/trace_stream.hpp),
+//                                       filter {"ids": [[from, to], ...]},
+//                                       {"lost": N} after frames a slow client lost;
+//                                       at most kMaxTraceClients per network (503)
+//   GET /api/v1/networks/{net}/capture  ?last=S (from the ring) or ?seconds=S (the
+//                                       next S seconds, collected, then sent),
+//                                       &format=pcapng (default) | candump
+//
+// Thread safety: io_context thread, as the server and the App.
+#pragma once
+
+#include <boost/json/object.hpp>
+#include <cstddef>
+
+#include "app.hpp"
+#include "trace/network_trace.hpp"
+#include "http_server.hpp"
+
+namespace gateway {
+
+inline constexpr std::size_t kMaxTraceClients = 8;
+
+// Adds the two routes. `app` MUST outlive the server's use of them; trace
+// sessions that outlive the App find its networks gone and end quietly.
+void register_trace_routes(http::HttpServer& server, App& app);
+
+// GET /api/v1/networks/{net}'s "busLoad": {"percent1s", "percent10s",
+// "bitrate"}, the percents rounded to 0.1 and null with "reason" when no
+// bit rate is configured; and "capture": the ring's settings and content.
+boost::json::object bus_load_json(const trace::NetworkTrace& tap);
+boost::json::object capture_json(const trace::NetworkTrace& tap);
+
+}  // namespace gateway
