@@ -236,6 +236,7 @@ class Builder {
   void build_object(std::uint16_t index, const ObjSections& secs);  // skips (with a warning) what read_object cannot read
   void read_object(std::uint16_t index, const ObjSections& secs);
   Template read_template(const IniSection& s, bool domain_defaults);
+  std::uint32_t obj_flags(const IniSection& s);
   od::SubEntry finish(const Template& t, std::uint8_t sub, const Parsed* override_value);
   void check_in_limits(const Template& t, const Parsed& p) const;
   // [xxxxName] / [xxxxValue]: numbered entries 1..count.
@@ -711,6 +712,21 @@ void Builder::check_in_limits(const Template& t, const Parsed& p) const {
   }
 }
 
+// CiA 306 ObjFlags: hints for tools, so a value that is no number ("NV")
+// is ignored with a warning instead of refusing the file.
+std::uint32_t Builder::obj_flags(const IniSection& s) {
+  const auto* e = s.find("objflags");
+  if (e == nullptr || e->value.empty()) return 0;
+  std::string what;
+  const auto bare = bare_number(e->value, &what);
+  auto v = parse_value(DataType::Unsigned32, bare ? std::string_view(*bare) : std::string_view(e->value));
+  if (!v) {
+    d_.warn(e->line, "ObjFlags '" + e->value + "' is not an UNSIGNED32; ignored");
+    return 0;
+  }
+  return static_cast<std::uint32_t>(std::get<std::uint64_t>(v->data));
+}
+
 Template Builder::read_template(const IniSection& s, bool domain_defaults) {
   Template t;
   const auto* name = s.find("parametername");
@@ -781,8 +797,7 @@ Template Builder::read_template(const IniSection& s, bool domain_defaults) {
     t.high.reset();
   }
 
-  if (const auto* flags = s.find("objflags"); flags != nullptr && !flags->value.empty())
-    t.obj_flags = static_cast<std::uint32_t>(number(*flags, DataType::Unsigned32));
+  t.obj_flags = obj_flags(s);
   t.def = parse_object_value(s.find("defaultvalue"), t.type);
   t.param = parse_object_value(s.find("parametervalue"), t.type);
   check_in_limits(t, t.def);
@@ -949,9 +964,7 @@ void Builder::read_object(std::uint16_t index, const ObjSections& secs) {
       throw SkipObject{s.line, std::string(od::to_string(code)) + " object " + subject(s) + " has no sub-objects (no [" +
                                    hex4(index) + "subN] sections and no CompactSubObj)"};
     }
-    std::uint32_t object_flags = 0;  // ObjFlags of the object section apply to its sub-objects
-    if (const auto* flags = s.find("objflags"); flags != nullptr && !flags->value.empty())
-      object_flags = static_cast<std::uint32_t>(number(*flags, DataType::Unsigned32));
+    const std::uint32_t object_flags = obj_flags(s);  // the object section's apply to its sub-objects
     for (const auto& [sub, ss] : secs.subs) {
       warn_unknown_keys(*ss, kSubKeys);
       bool domain = false;
