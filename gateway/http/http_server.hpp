@@ -105,7 +105,9 @@ class HttpServer {
   // Adds a route (see router.hpp for patterns and precedence). Throws
   // std::invalid_argument on a bad or duplicate pattern. The path
   // /api/v1/events is the server's own (WebSocket).
-  void add_route(std::string method, std::string_view pattern, Handler handler);
+  // `options`: the route's own body limit, body media types and handler
+  // timeout (RouteOptions); the body limit applies before the body is read.
+  void add_route(std::string method, std::string_view pattern, Handler handler, RouteOptions options = {});
   // Adds a WebSocket route GET `pattern` (router.hpp patterns) served by
   // the sources `handler` gives. A plain GET on it answers 426.
   void add_stream_route(std::string_view pattern, StreamHandler handler);

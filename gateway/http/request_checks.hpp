@@ -61,10 +61,11 @@ std::optional<std::string> framing_error(const HeaderFields& fields, unsigned ve
 bool is_state_changing(std::string_view method);
 
 // True when a state-changing request's body is something the API decodes:
-// Content-Type application/json, application/x-protobuf or
-// application/octet-stream (a file: EDS/DCF, program image; parameters such
-// as charset ignored), or neither a body nor a Content-Type at all.
-bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body);
+// Content-Type application/json or application/x-protobuf (parameters such
+// as charset ignored), one of the route's `extra` types, or neither a body
+// nor a Content-Type at all.
+bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body,
+                          const std::vector<std::string>& extra = {});
 
 // Which Host and Origin values belong to this gateway.
 //
