@@ -1174,6 +1174,10 @@ function noteDenied(role) {
   updateConfigButtons();
 }
 
+// Files (EDS, DCF, program images) go as they are: text/plain would be a
+// "simple" cross-site request, which the gateway refuses (415).
+const FILE_TYPE = 'application/octet-stream';
+
 const nodePath = (id, rest) => `/networks/${state.net}/nodes/${id}/${rest}`;
 
 function cfgStatus(sel, text, kind = 'info') {
@@ -1340,7 +1344,7 @@ function uploadEds() {
   return cfgRun(`Uploading ${file.name}`, id, '#eds-status', async () => {
     const text = await file.text();
     await roleApi('admin', 'PUT', `${nodePath(id, 'eds')}?name=${encodeURIComponent(file.name)}`, text,
-                  { contentType: 'text/plain; charset=utf-8' });
+                  { contentType: FILE_TYPE });
     $('#eds-file').value = '';
     forgetNode(id);
     await loadConfig(id);
@@ -1528,7 +1532,7 @@ async function applyDcf() {
   return cfgRun(`Applying ${d.name}`, id, '#dcf-status', async () => {
     const q = [store ? 'store=true' : null, reset ? 'reset=true' : null].filter(Boolean).join('&');
     const r = await roleApi('admin', 'POST', `${nodePath(id, 'dcf')}${q ? '?' + q : ''}`, d.text,
-                            { contentType: 'text/plain; charset=utf-8' });
+                            { contentType: FILE_TYPE });
     const objects = (r && (r.objects || r.results)) || [];
     let od = null;
     try { od = await odOf(id); } catch { od = null; }
@@ -1582,7 +1586,7 @@ async function downloadProgram() {
   setProgress($('#prog-bar'), $('#prog-text'), 0, file.size, 'bytes');
   return cfgRun(`Downloading program ${n}`, id, '#prog-status', async () => {
     const image = await file.arrayBuffer();
-    const r = await roleApi('admin', 'PUT', nodePath(id, `program/${n}`), image, { contentType: 'application/octet-stream' });
+    const r = await roleApi('admin', 'PUT', nodePath(id, `program/${n}`), image, { contentType: FILE_TYPE });
     const bytes = Number(r && r.bytes !== undefined ? r.bytes : file.size);
     if (state.selected === id) setProgress($('#prog-bar'), $('#prog-text'), bytes, bytes, 'bytes');
     const ident = r && r.identification;
