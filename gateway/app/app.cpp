@@ -3,6 +3,9 @@
 #include <filesystem>
 
 #include "canopen/eds/eds.hpp"
+#include "canopen/master/dcf_transfer.hpp"
+#include "canopen/master/program_download.hpp"
+#include "canopen/sdo/abort.hpp"
 #include "canopen/network.hpp"
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/link_monitor.hpp"
@@ -190,6 +193,77 @@ struct App::CoreNetworks final : core::Networks {
           done(o);
         },
         now);
+  }
+  // Remote maintenance on the network's services (canopen/master/
+  // dcf_transfer.hpp, program_download.hpp), their reports as the core's
+  // TransferOutcome. The services emit the `transfer` events themselves.
+  static std::error_code start_error(std::error_code ec) {
+    if (ec == canopen::master::TransferError::Busy) return std::make_error_code(std::errc::device_or_resource_busy);
+    if (ec == canopen::master::TransferError::NothingToTransfer) return std::make_error_code(std::errc::invalid_argument);
+    return ec;
+  }
+  static core::ObjectOutcome outcome_of(const canopen::master::ObjectResult& r) {
+    return core::ObjectOutcome{r.index, r.sub, r.error, r.detail};
+  }
+  std::error_code dcf_read(std::uint32_t net, std::uint8_t node, core::TransferDone done) override {
+    const auto* desc = app.description(net, node);
+    if (desc == nullptr) return make_error_code(canopen::SdoAbort::NoSuchObject);
+    // The DCF is written from the EDS as it was at the start: a copy, as a
+    // new EDS for the node may come meanwhile.
+    auto eds = std::make_shared<const canopen::eds::DeviceDescription>(*desc);
+    Net& x = n(net);
+    return start_error(x.network->read_dcf(
+        node, *eds,
+        [eds, node, done = std::move(done)](const canopen::master::DcfReadReport& r) {
+          core::TransferOutcome o;
+          o.error = r.stopped;
+          o.detail = r.detail;
+          for (const auto& f : r.failed) o.objects.push_back(outcome_of(f));
+          if (!o.error) {
+            o.text = canopen::master::write_dcf(*eds, node, r.values);
+            o.read = r.values.size();
+          }
+          done(std::move(o));
+        },
+        x.now()));
+  }
+  std::error_code dcf_apply(std::uint32_t net, std::uint8_t node, const canopen::eds::DeviceDescription& dcf,
+                            bool store, bool reset, core::TransferDone done) override {
+    Net& x = n(net);
+    canopen::master::DcfApplyOptions options;
+    options.store = store;
+    options.reset = reset;
+    return start_error(x.network->apply_dcf(
+        node, dcf, options,
+        [done = std::move(done)](const canopen::master::DcfApplyReport& r) {
+          core::TransferOutcome o;
+          o.error = r.stopped;
+          o.detail = r.detail;
+          for (const auto& w : r.objects) o.objects.push_back(outcome_of(w));
+          o.stored = r.stored;
+          o.reset = r.reset;
+          if (r.store_error) o.store_error = outcome_of(*r.store_error);
+          done(std::move(o));
+        },
+        x.now()));
+  }
+  std::error_code program_download(std::uint32_t net, std::uint8_t node, std::uint8_t program, canopen::Bytes image,
+                                   core::TransferDone done) override {
+    Net& x = n(net);
+    canopen::master::ProgramDownloadOptions options;
+    options.program = program;
+    return start_error(x.network->download_program(
+        node, options, std::move(image),
+        [done = std::move(done)](const canopen::master::ProgramDownloadReport& r) {
+          core::TransferOutcome o;
+          o.error = r.error;
+          o.remote = r.origin == canopen::sdo::Origin::Remote;
+          o.detail = r.detail;  // names the step and its object ("clear program (1F51h sub 1 := 3): ...")
+          o.bytes = r.bytes;
+          o.identification = r.identification;
+          done(std::move(o));
+        },
+        x.now()));
   }
   bool node_in_use(std::uint32_t net, std::uint8_t node) const override {
     const Net& x = n(net);

@@ -39,6 +39,10 @@ constexpr RouteRole kRouteRoles[] = {
     // Contract "LSS master (CiA 305), REST (role admin)": the listing too
     // (the POSTs are admin by default).
     {"GET", "/api/v1/networks/{net}/lss/devices", Role::Admin},
+    // Contract "Remote configuration and maintenance": store/restore operator
+    // (the DCF read is viewer, DCF apply and program download admin by default).
+    {"POST", "/api/v1/networks/{net}/nodes/{node}/store", Role::Operator},
+    {"POST", "/api/v1/networks/{net}/nodes/{node}/restore", Role::Operator},
 };
 
 std::string audit_target(const http::Request& req) { return req.method + " " + req.path; }

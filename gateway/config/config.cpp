@@ -432,7 +432,7 @@ void parse_ascii(const At& a, AsciiConfig& ac) {
 
 void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
   a.expect_map({"listen", "tls", "host-names", "allowed-origins", "tokens", "auth", "plain-http", "rate-limit",
-                "web-root", "max-connections", "max-connections-per-address"});
+                "web-root", "max-connections", "max-connections-per-address", "max-program-bytes"});
   if (auto v = a.get("listen")) {
     if (!split_host_port(v->str(), h.address, h.port)) v->fail("'" + v->str() + "' is not ADDR:PORT");
     h.listen_origin = v->where() + " " + v->str();
@@ -467,6 +467,8 @@ void parse_http(const At& a, HttpConfig& h, const std::string& dir) {
   }
   if (auto v = a.get("max-connections")) h.max_connections = v->integer(1, 100'000);
   if (auto v = a.get("max-connections-per-address")) h.max_connections_per_address = v->integer(0, 100'000);
+  if (auto v = a.get("max-program-bytes"))
+    h.max_program_bytes = static_cast<std::size_t>(v->integer(1024, 1024ULL * 1024 * 1024));
   if (auto v = a.get("auth")) h.auth = v->boolean();
   if (auto v = a.get("plain-http")) h.plain_http = v->boolean();
   if (auto r = a.get("rate-limit")) {

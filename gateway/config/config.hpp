@@ -181,6 +181,10 @@ struct HttpConfig : http::HttpConfig {
   bool plain_http = false;
   double rate_limit = 50;  // requests per second per client address (0 = no limit)
   double rate_burst = 100;
+  // The largest program image PUT .../program/{n} takes (http.max-program-bytes);
+  // every other route keeps max_body_bytes. The image is held in memory
+  // while it is downloaded.
+  std::size_t max_program_bytes = 16 * 1024 * 1024;
   // static_dir (http.web-root): "" = the built-in default (main).
 
   bool loopback() const { return address == "127.0.0.1" || address == "::1" || address == "localhost"; }

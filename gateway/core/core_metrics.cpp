@@ -1,5 +1,6 @@
 #include "core/core_metrics.hpp"
 
+#include <array>
 #include <vector>
 
 #include "metrics.hpp"
@@ -36,6 +37,21 @@ void register_metrics(metrics::Registry& r, const Counters& counters) {
   lss_result("failed", &Counters::lss_failed);
   r.counter_fn("canopen_gateway_lss_node_ids_assigned_total", "Node-IDs given to devices by LSS.", {},
                [c] { return metrics::Value(c->lss_assigned); });
+  // Remote maintenance (contract "Remote configuration and maintenance").
+  static constexpr std::string_view maint = "canopen_gateway_maintenance_operations_total";
+  static constexpr std::string_view maint_help =
+      "Remote maintenance operations (one per request) by operation (dcf-read, dcf-apply, store, restore, "
+      "program-download) and result: ok, failed (the device or the transfer), busy (409: another ran for the node).";
+  r.family(maint, maint_help, metrics::MetricType::Counter);
+  static constexpr std::array<const char*, Counters::kMaintenanceKinds> kinds = {"dcf-read", "dcf-apply", "store",
+                                                                                 "restore", "program-download"};
+  static constexpr std::array<const char*, Counters::kMaintenanceResults> results = {"ok", "failed", "busy"};
+  for (std::size_t k = 0; k < kinds.size(); ++k) {
+    for (std::size_t res = 0; res < results.size(); ++res) {
+      r.counter_fn(maint, maint_help, {{"operation", kinds[k]}, {"result", results[res]}},
+                   [c, k, res] { return metrics::Value(c->maintenance[k][res]); });
+    }
+  }
 }
 
 }  // namespace gateway::core

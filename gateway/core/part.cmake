@@ -9,6 +9,7 @@ add_library(gateway_core_types STATIC ${CMAKE_CURRENT_LIST_DIR}/request.cpp ${CM
 target_include_directories(gateway_core_types PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_core_types PUBLIC gateway_lib canopen_pdo canopen_od Boost::json PRIVATE canopen_options)
 
-add_library(gateway_core STATIC ${CMAKE_CURRENT_LIST_DIR}/request_core.cpp ${CMAKE_CURRENT_LIST_DIR}/core_metrics.cpp)
+add_library(gateway_core STATIC ${CMAKE_CURRENT_LIST_DIR}/request_core.cpp ${CMAKE_CURRENT_LIST_DIR}/maintenance.cpp
+                                 ${CMAKE_CURRENT_LIST_DIR}/core_metrics.cpp)
 target_link_libraries(gateway_core PUBLIC gateway_core_types gateway_auth canopen_network canopen_eds gateway_metrics
                                    PRIVATE gateway_rest_parse canopen_json canopen_options)

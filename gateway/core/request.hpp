@@ -352,6 +352,7 @@ struct DcfApplied {
   std::vector<ObjectOutcome> objects;
   bool stored = false;
   bool reset = false;
+  std::optional<ObjectOutcome> store_error;  // store asked, and 1010h sub 1 refused it
 };
 // NodeStore.
 struct NodeStored {

@@ -118,13 +118,6 @@ std::optional<Problem> resolve_own_type(const canopen::od::ObjectDictionary& od,
 
 }  // namespace
 
-struct RequestCore::Context {
-  Caller caller;
-  std::uint32_t network = 0;
-  bool check_bus = false;
-  Done done;
-};
-
 RequestCore::RequestCore(Networks& networks, const auth::TokenStore& tokens, Settings settings, AuditSink audit)
     : net_(networks),
       tokens_(tokens),
@@ -186,10 +179,14 @@ void RequestCore::execute(Request request, Done done) {
         else if constexpr (std::is_same_v<T, PdoConfigRead>) pdo_config_read(c, cmd);
         else if constexpr (std::is_same_v<T, Undecodable>) {}  // answered above
         else if constexpr (std::is_same_v<T, NodeConfigRead> || std::is_same_v<T, NodeConfigWrite> ||
-                           std::is_same_v<T, NodeEdsWrite> || std::is_same_v<T, DcfRead> ||
-                           std::is_same_v<T, DcfApply> || std::is_same_v<T, NodeStore> ||
-                           std::is_same_v<T, ProgramDownload>)
+                           std::is_same_v<T, NodeEdsWrite>)
           c.done(problem(501, "not implemented yet (issue 17 in progress)"));
+        // Remote maintenance (maintenance.cpp).
+        else if constexpr (std::is_same_v<T, DcfRead>) dcf_read(c, cmd);
+        else if constexpr (std::is_same_v<T, DcfApply>) dcf_apply(c, cmd);
+        else if constexpr (std::is_same_v<T, NodeStore>) node_store(c, cmd);
+        else if constexpr (std::is_same_v<T, ProgramDownload>)  // the image moves on, not copied
+          program_download(c, std::move(std::get<ProgramDownload>(request.command)));
         else lss(c, command);  // the LSS commands
       },
       command);

@@ -20,6 +20,8 @@
 //     multi-step ones (configure, assign-all, fastscan) as a sequence of
 //     single services that ends with all slaves back in waiting state, also
 //     after a failure; the last scan's finds kept per network;
+//   - remote maintenance (DCF read-back/apply, store/restore, program
+//     download): one per node at a time (409), audited, counted;
 //   - counters and the SDO latency histogram (/metrics).
 // The core reaches the CAN side only through Networks, which the process
 // (App) implements over its networks and tests fake.
@@ -82,6 +84,32 @@ struct LssOutcome {
   std::string detail;         // failed: why; refused with FFh: the manufacturer-specific code
 };
 
+// How a DCF read-back, a DCF apply or a program download (the network's
+// services for a node, canopen::Network) ended. One shape for the three;
+// each fills what it has.
+struct TransferOutcome {
+  // Empty: done (a DCF read-back or apply also when single objects failed:
+  // see `objects`). Otherwise what stopped it: an SDO abort code (see
+  // `remote`), std::errc::device_or_resource_busy (another transfer runs for
+  // the node), std::errc::invalid_argument (nothing to read or write: the
+  // EDS/DCF lists no such object), or another code with `detail`.
+  std::error_code error;
+  bool remote = false;  // `error` is the device's abort (else the gateway's)
+  std::string step;     // program download: the step that failed ("stop program (1F51h sub 1)", ...)
+  std::string detail;
+  std::string text;     // DCF read-back: the DCF
+  std::size_t read = 0;  // DCF read-back: objects read
+  // DCF read-back: the objects that aborted; DCF apply: every object
+  // written, in order, with its outcome.
+  std::vector<ObjectOutcome> objects;
+  bool stored = false;  // DCF apply: 1010h sub 1 "save" confirmed
+  std::optional<ObjectOutcome> store_error;  // DCF apply: the save was refused
+  bool reset = false;   // DCF apply: NMT reset node sent
+  std::size_t bytes = 0;                        // program download: the image's size
+  std::optional<std::uint32_t> identification;  // program download: 1F56h sub n, where the device has it
+};
+using TransferDone = std::function<void(TransferOutcome)>;
+
 // The CAN side as the core needs it. Networks are numbered 1..count(). The
 // core calls only with a network in that range. Implementations let the
 // services follow what they are asked (new timer deadlines) themselves.
@@ -131,6 +159,22 @@ class Networks {
   // Whether `node` is taken on `net` (the gateway's own, configured, or
   // heard): LssAssignAll skips it.
   virtual bool node_in_use(std::uint32_t net, std::uint8_t node) const = 0;
+  // Remote maintenance of `node` (canopen::Network's services; each goes
+  // through the node's SDO queue and reports progress as `transfer` events
+  // in the network's event stream). `done` runs once, later, unless an error
+  // is returned (busy: std::errc::device_or_resource_busy; the node's queue
+  // full: SdoAbort::NoSdoConnection).
+  // DCF read-back of the node's configurable objects (its EDS/DCF's).
+  virtual std::error_code dcf_read(std::uint32_t net, std::uint8_t node, TransferDone done) = 0;
+  // Writes `dcf`'s values in the boot-up configurator's order (`dcf` is
+  // not kept after the call), then stores (1010h sub 1 "save") and resets
+  // the node as asked (the reset only after a successful save, or with no
+  // save asked).
+  virtual std::error_code dcf_apply(std::uint32_t net, std::uint8_t node, const canopen::eds::DeviceDescription& dcf,
+                                    bool store, bool reset, TransferDone done) = 0;
+  // CiA 302-3 program download of `image` to 1F50h sub `program`.
+  virtual std::error_code program_download(std::uint32_t net, std::uint8_t node, std::uint8_t program,
+                                           canopen::Bytes image, TransferDone done) = 0;
   // The time for the rate limit and the SDO latency histogram.
   virtual std::chrono::steady_clock::time_point now() const { return std::chrono::steady_clock::now(); }
 };
@@ -146,6 +190,12 @@ struct Counters {
   // LSS operations (one per request) by how they ended, and node-IDs given.
   std::uint64_t lss_ok = 0, lss_timeouts = 0, lss_refused = 0, lss_none_found = 0, lss_busy = 0, lss_failed = 0;
   std::uint64_t lss_assigned = 0;
+  // Maintenance operations (contract "Remote configuration and
+  // maintenance") by kind and how they ended: ok, failed (the device or the
+  // transfer), busy (409: another transfer ran for the node).
+  enum MaintenanceKind : std::uint8_t { dcf_read, dcf_apply, store, restore, program_download, kMaintenanceKinds };
+  enum MaintenanceResult : std::uint8_t { ok, failed, busy, kMaintenanceResults };
+  std::array<std::array<std::uint64_t, kMaintenanceResults>, kMaintenanceKinds> maintenance{};
   // SDO transfers on the bus, submit to result (queueing included), as a
   // Prometheus histogram: count per upper bound (seconds; not cumulative),
   // the last slot for slower ones.
@@ -181,7 +231,13 @@ class RequestCore {
   std::size_t sdo_share() const { return shares_.share(); }
 
  private:
-  struct Context;
+  // One request on its way (shared by request_core.cpp and maintenance.cpp).
+  struct Context {
+    Caller caller;
+    std::uint32_t network = 0;
+    bool check_bus = false;
+    Done done;
+  };
   void sdo_read(Context& c, const SdoRead& cmd);
   void sdo_write(Context& c, const SdoWrite& cmd);
   void nmt(Context& c, const Nmt& cmd);
@@ -193,6 +249,17 @@ class RequestCore {
   struct LssRun;
   void lss_next(std::shared_ptr<LssRun> run);
   void lss_finish(const std::shared_ptr<LssRun>& run, Result result);
+  // Remote maintenance (maintenance.cpp): DCF read-back and apply, store and
+  // restore, program download. One runs per node at a time (409 otherwise);
+  // each holds one place of the caller's share of the node's SDO queue.
+  void dcf_read(Context& c, const DcfRead& cmd);
+  void dcf_apply(Context& c, const DcfApply& cmd);
+  void node_store(Context& c, const NodeStore& cmd);
+  void program_download(Context& c, ProgramDownload cmd);  // by value: the image moves on
+  struct MaintenanceRun;
+  std::optional<Problem> maintenance_start(const Context& c, std::uint8_t node, Counters::MaintenanceKind kind,
+                                           const std::string& line);
+  void maintenance_end(const MaintenanceRun& run, Result result, const std::string& outcome);
   // 401/403 (counted, audited) when the caller may not do what needs `need`.
   std::optional<Problem> refused(const Context& c, Role need, std::string_view what, std::uint8_t node,
                                  bool command_read);
@@ -217,6 +284,7 @@ class RequestCore {
   Counters counters_;
   std::map<std::uint32_t, bool> lss_busy_;                          // per network
   std::map<std::uint32_t, std::vector<LssDeviceSeen>> lss_found_;  // per network: the last scan's finds
+  std::map<std::uint64_t, bool> maintenance_busy_;                  // per sdo_queue_key: one transfer per node
 };
 
 }  // namespace gateway::core

@@ -77,7 +77,9 @@ class HttpServer {
   // Adds a route (see router.hpp for patterns and precedence). Throws
   // std::invalid_argument on a bad or duplicate pattern. The path
   // /api/v1/events is the server's own (WebSocket).
-  void add_route(std::string method, std::string_view pattern, Handler handler);
+  // `options`: the route's own body limit, body media types and handler
+  // timeout (RouteOptions); the body limit applies before the body is read.
+  void add_route(std::string method, std::string_view pattern, Handler handler, RouteOptions options = {});
   // Every (method, pattern) added, in the order added.
   std::vector<std::pair<std::string, std::string>> routes() const;
   // Replaces the security hook (default: allow everything).

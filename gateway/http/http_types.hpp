@@ -6,6 +6,8 @@
 // once (later calls are ignored), and is a no-op once the connection is gone.
 #pragma once
 
+#include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -79,6 +81,25 @@ using Responder = std::function<void(Response)>;
 // the Responder is pending. If it never answers, the server answers 500
 // after HttpConfig::handler_timeout.
 using Handler = std::function<void(const Request&, Responder)>;
+
+// What a route needs of the server beyond the defaults (HttpConfig). Most
+// routes take none; a file upload (a DCF, a program image) takes its own
+// body limit, media types and time.
+struct RouteOptions {
+  // The largest body this route reads (larger -> 413, close); 0 =
+  // HttpConfig::max_body_bytes. Applied from the request's header on, so
+  // other routes keep the server's limit.
+  std::size_t max_body_bytes = 0;
+  // Media types a state-changing request's body may have besides
+  // application/json and application/x-protobuf (e.g.
+  // "application/octet-stream"). Never add a CORS-safelisted one
+  // (text/plain, forms): those are what the 415 check keeps out.
+  std::vector<std::string> body_types;
+  // Replaces HttpConfig::handler_timeout for this route; zero = none (the
+  // handler MUST then answer by itself, e.g. because every step it waits for
+  // has its own timeout).
+  std::optional<std::chrono::milliseconds> handler_timeout;
+};
 
 // Security hook, run before every matched route (including static files)
 // and before the WebSocket upgrade, after the body has been read: nullopt =

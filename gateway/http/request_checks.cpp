@@ -149,10 +149,14 @@ std::optional<std::string> framing_error(const HeaderFields& fields, unsigned ve
 
 bool is_state_changing(std::string_view method) { return method != "GET" && method != "HEAD" && method != "OPTIONS"; }
 
-bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body) {
+bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body,
+                          const std::vector<std::string>& extra) {
   if (!content_type) return !has_body;
   const auto media = trim(content_type->substr(0, content_type->find(';')));
-  return iequals(media, "application/json") || iequals(media, "application/x-protobuf");
+  if (iequals(media, "application/json") || iequals(media, "application/x-protobuf")) return true;
+  for (const auto& e : extra)
+    if (iequals(media, e)) return true;
+  return false;
 }
 
 OriginPolicy::OriginPolicy(Settings s) {

@@ -62,8 +62,10 @@ bool is_state_changing(std::string_view method);
 
 // True when a state-changing request's body is something the API decodes:
 // Content-Type application/json or application/x-protobuf (parameters such
-// as charset ignored), or neither a body nor a Content-Type at all.
-bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body);
+// as charset ignored), one of the route's `extra` types, or neither a body
+// nor a Content-Type at all.
+bool acceptable_body_type(std::optional<std::string_view> content_type, bool has_body,
+                          const std::vector<std::string>& extra = {});
 
 // Which Host and Origin values belong to this gateway.
 //

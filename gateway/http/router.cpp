@@ -4,7 +4,7 @@
 
 namespace gateway::http {
 
-void Router::add(std::string method, std::string_view pattern, Handler handler) {
+void Router::add(std::string method, std::string_view pattern, Handler handler, RouteOptions options) {
   if (pattern.empty() || pattern.front() != '/') throw std::invalid_argument("route pattern must start with '/'");
   Route r;
   r.method = std::move(method);
@@ -29,6 +29,7 @@ void Router::add(std::string method, std::string_view pattern, Handler handler) 
   for (const auto& o : routes_)
     if (o.method == r.method && o.pattern == r.pattern) throw std::invalid_argument("duplicate route " + r.pattern);
   r.handler = std::move(handler);
+  r.options = std::move(options);
   routes_.push_back(std::move(r));
 }
 
@@ -60,6 +61,7 @@ Router::Match Router::match(std::string_view method, const std::vector<std::stri
   if (best) {
     m.kind = Match::Kind::Found;
     m.handler = &best->handler;
+    m.options = &best->options;
     m.pattern = best->pattern;
     for (std::size_t i = 0; i < segments.size(); ++i)
       if (best->segments[i].param) m.params.emplace(best->segments[i].text, segments[i]);

@@ -23,11 +23,12 @@ class Router {
  public:
   // Throws std::invalid_argument on a malformed pattern (no leading '/',
   // empty or unterminated "{}") or a duplicate (method, pattern).
-  void add(std::string method, std::string_view pattern, Handler handler);
+  void add(std::string method, std::string_view pattern, Handler handler, RouteOptions options = {});
 
   struct Match {
     enum class Kind { Found, NotFound, MethodNotAllowed } kind = Kind::NotFound;
     const Handler* handler = nullptr;  // Found
+    const RouteOptions* options = nullptr;  // Found
     std::string pattern;               // Found: the route's pattern
     std::map<std::string, std::string, std::less<>> params;
     std::string allow;  // MethodNotAllowed: "GET, PUT"
@@ -50,6 +51,7 @@ class Router {
     std::string pattern;
     std::vector<Segment> segments;
     Handler handler;
+    RouteOptions options;
   };
   static bool matches(const Route& r, const std::vector<std::string>& segs);
   static bool more_specific(const Route& a, const Route& b);

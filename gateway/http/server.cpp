@@ -545,12 +545,14 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
       req->route = std::move(m.pattern);
       // A form or a text/plain fetch is a "simple" cross-site request even
       // for browsers that send no Origin: the API reads only its own types.
-      if (is_state_changing(req->method) && !acceptable_body_type(req->header("content-type"), !req->body.empty())) {
+      const auto& extra = m.options->body_types;
+      if (is_state_changing(req->method) &&
+          !acceptable_body_type(req->header("content-type"), !req->body.empty(), extra)) {
         impl_->counters.refused_media_type.fetch_add(1, std::memory_order_relaxed);
-        Response r = Response::problem(
-            415,
-            "the body of " + req->method + " " + req->path + " must be application/json or application/x-protobuf");
-        r.headers.emplace_back("Accept", "application/json, application/x-protobuf");
+        std::string types = "application/json, application/x-protobuf";
+        for (const auto& e : extra) types += ", " + e;
+        Response r = Response::problem(415, "the body of " + req->method + " " + req->path + " must be one of " + types);
+        r.headers.emplace_back("Accept", types);
         send(std::move(r));
         return;
       }
@@ -558,7 +560,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
         send(std::move(*denied));
         return;
       }
-      run_handler(*m.handler, std::move(req));
+      run_handler(*m.handler, std::move(req), m.options->handler_timeout.value_or(impl_->cfg.handler_timeout));
       return;
     }
     const auto& cfg = impl_->cfg;
@@ -609,7 +611,8 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     }
   }
 
-  void run_handler(const Handler& handler, std::shared_ptr<Request> req) {
+  // `timeout` zero: no handler timer (the route answers by itself).
+  void run_handler(const Handler& handler, std::shared_ptr<Request> req, std::chrono::milliseconds timeout) {
     auto pending = std::make_shared<PendingReply>();
     pending->conn = weak_from_this();
     pending_ = pending;
@@ -621,12 +624,14 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
       });
     };
     auto self = shared_from_this();
-    handler_timer_.expires_after(impl_->cfg.handler_timeout);
-    handler_timer_.async_wait([self, pending](error_code ec) {
-      if (ec || pending->done.exchange(true)) return;
-      self->impl_->debug("handler for " + self->peer_ + " did not answer in time");
-      self->reply(pending, Response::problem(500, "the request handler did not answer in time"));
-    });
+    if (timeout.count() > 0) {
+      handler_timer_.expires_after(timeout);
+      handler_timer_.async_wait([self, pending](error_code ec) {
+        if (ec || pending->done.exchange(true)) return;
+        self->impl_->debug("handler for " + self->peer_ + " did not answer in time");
+        self->reply(pending, Response::problem(500, "the request handler did not answer in time"));
+      });
+    }
     try {
       handler(*req, std::move(responder));
     } catch (const std::exception& e) {
@@ -737,7 +742,8 @@ class HttpSession final : public Connection {
     version_ = 11;
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(impl_->cfg.max_header_bytes));
-    parser_->body_limit(impl_->cfg.max_body_bytes);
+    body_limit_ = impl_->cfg.max_body_bytes;
+    parser_->body_limit(body_limit_);
     if (buffer_.size() > 0) {  // pipelined: the next request has begun
       read_header();
       return;
@@ -783,6 +789,12 @@ class HttpSession final : public Connection {
       send(std::move(*refused));
       return;
     }
+    // A route with its own body limit (an upload) gets it before its body
+    // is read; every other request keeps the server's.
+    if (const auto* opts = route_options(req); opts != nullptr && opts->max_body_bytes > 0) {
+      body_limit_ = opts->max_body_bytes;
+      parser_->body_limit(body_limit_);
+    }
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     if (!parser_->is_done() && iequals(req[bhttp::field::expect], "100-continue")) {
       // curl and others wait for this before sending a larger body.
@@ -815,10 +827,21 @@ class HttpSession final : public Connection {
     handle(parser_->release());
   }
 
+  // The options of the route the header's target and method match; nullptr
+  // for none (or a target the request's handling will refuse anyway).
+  const RouteOptions* route_options(const BeastRequest& req) const {
+    auto parsed = boost::urls::parse_origin_form(req.target());
+    if (!parsed) return nullptr;
+    std::vector<std::string> segments;
+    for (auto seg : parsed->segments()) segments.emplace_back(seg);
+    auto m = impl_->router.match(std::string(req.method_string()), segments);
+    return m.kind == Router::Match::Kind::Found ? m.options : nullptr;
+  }
+
   void on_read_error(error_code ec) {
     if (ec == bhttp::error::body_limit) {
       keep_alive_ = false;
-      send(Response::problem(413, "request body larger than " + std::to_string(impl_->cfg.max_body_bytes) + " bytes"));
+      send(Response::problem(413, "request body larger than " + std::to_string(body_limit_) + " bytes"));
     } else if (ec == bhttp::error::header_limit) {
       keep_alive_ = false;
       send(Response::problem(431, "request header too large"));
@@ -884,6 +907,7 @@ class HttpSession final : public Connection {
   Stream stream_;
   beast::flat_buffer buffer_;
   std::optional<bhttp::request_parser<bhttp::string_body>> parser_;
+  std::size_t body_limit_ = 0;  // of the request being read: the route's or the server's
   BeastResponse res_;
   std::array<char, 4096> discard_{};
   bool upgraded_ = false;
@@ -1021,9 +1045,9 @@ HttpServer::~HttpServer() {
   impl_->authorizer = nullptr;
 }
 
-void HttpServer::add_route(std::string method, std::string_view pattern, Handler handler) {
+void HttpServer::add_route(std::string method, std::string_view pattern, Handler handler, RouteOptions options) {
   if (pattern == kEventsPath) throw std::invalid_argument("route " + std::string(pattern) + " is the event stream's");
-  impl_->router.add(std::move(method), pattern, std::move(handler));
+  impl_->router.add(std::move(method), pattern, std::move(handler), std::move(options));
 }
 
 std::size_t HttpServer::binary_clients() const {

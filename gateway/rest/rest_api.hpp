@@ -18,10 +18,17 @@
 //   POST /api/v1/networks/{net}/lss/configure            {"identity", "nodeId", "bitrate"?, "store"}
 //   POST /api/v1/networks/{net}/lss/assign-all           {"firstNodeId", "store"}: every unconfigured device
 //   GET  /api/v1/networks/{net}/lss/devices              what the last scan found
+//   GET  /api/v1/networks/{net}/nodes/{node}/dcf         DCF read-back (text/plain node<N>.dcf; JSON with Accept)
+//   POST /api/v1/networks/{net}/nodes/{node}/dcf         DCF apply (octet-stream body, ?store=&reset=; or JSON)
+//   POST /api/v1/networks/{net}/nodes/{node}/store       1010h sub 1 "save" (operator)
+//   POST /api/v1/networks/{net}/nodes/{node}/restore     1011h sub 1 "load", then NMT reset node (operator)
+//   PUT  /api/v1/networks/{net}/nodes/{node}/program/{n} CiA 302-3 program download (octet-stream image,
+//                                                         up to http.max-program-bytes); answers when it runs
 //
 // Errors are application/problem+json (400 malformed, 404 unknown network /
 // node EDS / object / RPDO or no unconfigured device (LSS fastscan), 409
-// another LSS operation runs, 422 SDO abort or LSS slave error, 503 bus-off
+// another LSS operation runs (or another DCF transfer, store/restore or
+// program download for the node), 413 a body over the route's limit, 422 SDO abort or LSS slave error, 503 bus-off
 // or down, 504 SDO or LSS timeout). Protobuf: SDO and NMT requests take `Content-Type:
 // application/x-protobuf` bodies, and SDO replies (and their problems) are
 // binary protobuf with `Accept: application/x-protobuf`; NMT replies are

@@ -6,11 +6,15 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 #include <vector>
 
 #include "canopen/pdo/mapping.hpp"
+#include "canopen/sdo/abort.hpp"
+#include "canopen/od/gateway_dictionary.hpp"
+#include "sim/device_objects.hpp"
 
 namespace canopen::sim {
 
@@ -114,6 +118,35 @@ std::optional<Value> generate(const od::ObjectDictionary& od, std::uint16_t prof
   return std::nullopt;
 }
 
+// The index range of a 1010h/1011h sub-index (CiA 301 7.5.2.13).
+std::optional<std::pair<std::uint16_t, std::uint16_t>> parameter_group(std::uint8_t group) {
+  switch (group) {
+    case 1: return std::pair<std::uint16_t, std::uint16_t>{0x1000, 0x9FFF};
+    case 2: return std::pair<std::uint16_t, std::uint16_t>{0x1000, 0x1FFF};
+    case 3: return std::pair<std::uint16_t, std::uint16_t>{0x2000, 0x9FFF};
+    case 4: return std::pair<std::uint16_t, std::uint16_t>{0x2000, 0x5FFF};  // as canopen::Device
+    default: return std::nullopt;
+  }
+}
+
+// Program download objects (CiA 302-3) hold the program, not settings: resets keep them.
+bool is_program_object(std::uint16_t index) { return index >= 0x1F50 && index <= 0x1F5F; }
+
+// Copies the writable entries of `from` in the group's range into `to`
+// (the values a reset brings back).
+void copy_parameters(const od::ObjectDictionary& from, od::ObjectDictionary& to, std::uint8_t group) {
+  const auto range = parameter_group(group);
+  if (!range) return;
+  for (const auto& [index, obj] : from.objects()) {
+    if (index < range->first || index > range->second || is_program_object(index) || index == 0x1003 ||
+        index == 0x1010 || index == 0x1011)
+      continue;
+    for (const auto& [sub, entry] : obj.subs)
+      if (od::writable(entry.access))
+        if (od::SubEntry* e = to.find(index, sub)) e->value = entry.value;
+  }
+}
+
 void ensure_u32(od::ObjectDictionary& od, std::uint16_t index, const char* name, std::uint32_t value) {
   if (od.find(index, 0) == nullptr)
     od.insert(od::make_var(index, name, DataType::Unsigned32, od::Access::ReadWrite,
@@ -126,6 +159,7 @@ struct Simulator::Node {
   std::uint8_t id = lss::kUnconfiguredNodeId;  // the active node-ID; FFh while unconfigured
   std::uint16_t profile = 0;     // 1000h bits 0-15
   od::ObjectDictionary initial;  // the EDS values, restored by resets
+  od::ObjectDictionary factory;  // the EDS values, which 1011h "load" brings back
   od::ObjectDictionary od;
   std::unique_ptr<Device> device;  // none while unconfigured
   bool sync_producer = false;
@@ -229,6 +263,24 @@ void Simulator::build_device(Node& n, std::uint8_t node, eds::DeviceDescription 
     ensure_u32(n.od, 0x1006, "Communication cycle period", 0);
   }
   n.initial = n.od;
+  n.factory = n.od;
+  // 1010h "save" / 1011h "load": the device's power-on values and what the
+  // simulation's resets restore change together.
+  od::install_store_restore(
+      n.od,
+      [np](std::uint8_t group) -> std::error_code {
+        if (!np->device) return make_error_code(SdoAbort::CannotStoreDeviceState);
+        if (auto ec = np->device->store_parameters(group)) return ec;
+        copy_parameters(np->od, np->initial, group);
+        return {};
+      },
+      [np](std::uint8_t group) -> std::error_code {
+        if (!np->device) return make_error_code(SdoAbort::CannotStoreDeviceState);
+        if (auto ec = np->device->restore_default_parameters(group)) return ec;
+        copy_parameters(np->factory, np->initial, group);
+        return {};
+      });
+  (void)install_program_objects(n.od);
 
   DeviceConfig cfg;
   cfg.node_id = node;
@@ -362,7 +414,7 @@ lss::LssSlave* Simulator::lss(std::uint8_t node) {
 
 void Simulator::restore(Node& n, std::uint16_t first, std::uint16_t last) {
   for (const auto& [index, obj] : n.initial.objects()) {
-    if (index < first || index > last) continue;
+    if (index < first || index > last || is_program_object(index)) continue;
     for (const auto& [sub, entry] : obj.subs) (void)n.od.set(index, sub, entry.value);
   }
 }

@@ -6,7 +6,10 @@
 //   - boot-up, heartbeat (1017h set from SimulatorOptions::heartbeat),
 //     reacts to NMT (PDOs only while operational; reset node/communication
 //     restore the EDS values and boot again);
-//   - SDO server over its whole dictionary;
+//   - SDO server over its whole dictionary; 1010h "save" / 1011h "load"
+//     change what its resets restore (sim/device_objects.hpp), and where
+//     its EDS has them, the CiA 302-3 program objects 1F50h/1F51h/1F56h/
+//     1F57h keep a downloaded image (in memory) across resets;
 //   - every tpdo_period, while operational, writes plausible new values to
 //     the objects its TPDOs map (a CiA 402 drive: position ramp, velocity,
 //     torque; a CiA 401 module: digital inputs toggling, analog inputs as a

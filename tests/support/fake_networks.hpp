@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <chrono>
 #include <deque>
+#include <memory>
+#include <string>
 #include <optional>
 #include <span>
 #include <vector>
@@ -86,7 +88,32 @@ struct FakeNetworks final : Networks {
   bool node_in_use(std::uint32_t, std::uint8_t node) const override {
     return node == kOwnNode || std::find(in_use.begin(), in_use.end(), node) != in_use.end();
   }
+  std::error_code dcf_read(std::uint32_t, std::uint8_t node, TransferDone done) override {
+    if (transfer_refuse) return transfer_refuse;
+    transfers.push_back({"dcf-read", node, {}, 0, {}, std::move(done)});
+    return {};
+  }
+  std::error_code dcf_apply(std::uint32_t, std::uint8_t node, const canopen::eds::DeviceDescription& dcf, bool store,
+                            bool reset, TransferDone done) override {
+    if (transfer_refuse) return transfer_refuse;
+    transfers.push_back({"dcf-apply", node, std::make_shared<canopen::eds::DeviceDescription>(dcf), 0, {},
+                         std::move(done), store, reset});
+    return {};
+  }
+  std::error_code program_download(std::uint32_t, std::uint8_t node, std::uint8_t program, canopen::Bytes image,
+                                   TransferDone done) override {
+    if (transfer_refuse) return transfer_refuse;
+    transfers.push_back({"program", node, {}, program, std::move(image), std::move(done)});
+    return {};
+  }
   std::chrono::steady_clock::time_point now() const override { return t; }
+
+  // Ends the oldest pending maintenance transfer with `o`.
+  void transfer_answer(TransferOutcome o = {}) {
+    auto p = std::move(transfers.front());
+    transfers.pop_front();
+    p.done(std::move(o));
+  }
 
   // Ends the oldest pending LSS step with `o` (default: ok).
   void lss_answer(LssOutcome o = {}) {
@@ -129,6 +156,18 @@ struct FakeNetworks final : Networks {
   std::deque<PendingLss> lss_pending;
   std::error_code lss_refuse;      // lss() returns it (nothing pending)
   std::vector<std::uint8_t> in_use;  // besides the own node
+  // Maintenance transfers (DCF read/apply, program download) waiting for transfer_answer().
+  struct PendingTransfer {
+    std::string kind;  // "dcf-read", "dcf-apply", "program"
+    std::uint8_t node = 0;
+    std::shared_ptr<const canopen::eds::DeviceDescription> dcf;
+    std::uint8_t program = 0;
+    canopen::Bytes image;
+    TransferDone done;
+    bool store = false, reset = false;  // dcf-apply
+  };
+  std::deque<PendingTransfer> transfers;
+  std::error_code transfer_refuse;  // the maintenance calls return it (nothing pending)
 };
 
 }  // namespace gateway::core::test_support

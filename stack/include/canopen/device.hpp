@@ -50,7 +50,8 @@
 //     the SYNC producer.
 //   - Power-on values (7.3.2.2.1): the first start() takes the values of
 //     every writable entry of 1000h-9FFFh as the power-on values (not
-//     1003h, 1010h, 1011h: history and commands, not parameters). Reset
+//     1003h, 1010h, 1011h: history and commands, not parameters; not
+//     1F50h-1F5Fh: a downloaded program (CiA 302-3) survives resets). Reset
 //     communication sets 1000h-1FFFh back to them, reset node also
 //     2000h-9FFFh, before the reset callbacks run; so a 1017h written since
 //     is undone and the heartbeat producer, SYNC producer and PDOs follow.
@@ -159,7 +160,9 @@ class Device : public DeadlineSource {
   // 1400h-1BFFh and on reset communication).
   void reconfigure_pdos(TimePoint now);
   // Parameter groups as the sub-indexes of 1010h/1011h: 1 all, 2
-  // communication (1000h-1FFFh), 3 application (2000h-9FFFh). A 1010h/1011h
+  // communication (1000h-1FFFh), 3 application (2000h-9FFFh), 4
+  // manufacturer-specific (2000h-5FFFh; sub 4..7Fh are the manufacturer's
+  // choice in CiA 301, this is ours). A 1010h/1011h
   // write hook may call them (they do not touch the dictionary).
   // NoSuchSubIndex for another group, CannotStoreDeviceState before start().
   std::error_code store_parameters(std::uint8_t group);

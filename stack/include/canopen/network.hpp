@@ -6,7 +6,8 @@
 // timer caused (a node lost).
 //
 // Services: NMT master (node tracking, heartbeat consumer, node guarding),
-// SDO client, boot-up configuration of nodes (CiA 302 spirit), PDO receiver
+// SDO client, boot-up configuration of nodes (CiA 302 spirit), DCF
+// read-back and apply, program download (CiA 302-3), PDO receiver
 // (the nodes' TPDOs), PDO producer (process data to the nodes' RPDOs, with
 // synchronous types driven by the SYNCs this network sees), EMCY, SYNC and
 // TIME consumers, LSS master (CiA 305).
@@ -45,6 +46,8 @@
 #include "canopen/events.hpp"
 #include "canopen/lss/master.hpp"
 #include "canopen/master/boot_configurator.hpp"
+#include "canopen/master/dcf_transfer.hpp"
+#include "canopen/master/program_download.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/pdo/config_reader.hpp"
@@ -91,6 +94,38 @@ class Network : public DeadlineSource {
   // not called): SdoAbort::NoSuchObject for a node not added, the SDO
   // client's submit errors. A boot-up of the node cancels its read.
   std::error_code read_pdo_config(std::uint8_t node, pdo::PdoConfigReader::Done done, TimePoint now);
+  // ---- maintenance transfers (one at a time per node, any kind) ------------
+  // Each runs its service (master/dcf_transfer.hpp, master/program_download.hpp)
+  // on this network's SdoClient, through the node's SDO queue, and reports
+  // TransferEvents in this network's event stream (seq, wall-time stamp):
+  // Running at the start and with progress, then one Done or Failed; `done`
+  // is called after that last event. Errors returned (nothing started, no
+  // event, done not called): master::TransferError::BadNode (not 1..127),
+  // Busy (a DCF read, DCF apply or program download already runs for the
+  // node: REST 409), NothingToTransfer, BadProgramNumber, EmptyImage, or
+  // the SDO client's submit error (SdoAbort::NoSdoConnection: queue full).
+  // The descriptions are not kept after the call. A boot-up of the node
+  // does not cancel them (an SDO timeout does); cancel_transfer() does.
+  //
+  // Reads the configurable objects of `description` (the node's EDS/DCF)
+  // from the node; master::write_dcf(description, node, report.values)
+  // makes the DCF text.
+  std::error_code read_dcf(std::uint8_t node, const eds::DeviceDescription& description,
+                           master::DcfReader::Done done, TimePoint now);
+  // Writes the values of `dcf` to the node (PDO writes update the decoder
+  // and producer as any SDO download to 1400h-1BFFh does), then optionally
+  // stores (1010h sub 1 "save") and resets it (NMT reset node).
+  std::error_code apply_dcf(std::uint8_t node, const eds::DeviceDescription& dcf, master::DcfApplyOptions options,
+                            master::DcfApplier::Done done, TimePoint now);
+  // CiA 302-3 program download of `image` to program options.program.
+  std::error_code download_program(std::uint8_t node, master::ProgramDownloadOptions options, Bytes image,
+                                   master::ProgramDownloader::Done done, TimePoint now);
+  // Whether a DCF read, DCF apply or program download runs for the node.
+  bool transfer_busy(std::uint8_t node) const;
+  // Cancels the node's running transfer (Failed event, done with
+  // cancelled = true); false when none runs.
+  bool cancel_transfer(std::uint8_t node, TimePoint now);
+
   // The PDO parameters in effect for the described nodes and their source.
   const pdo::RemotePdoTable& pdo_config() const { return pdo_table_; }
   // Sends an NMT command (node 0 = all) and, for start/stop/pre-operational,
@@ -124,6 +159,7 @@ class Network : public DeadlineSource {
  private:
   void emit(EventBody body, can::Frame::Clock::time_point timestamp);
   void on_boot_event(const BootConfigEvent& ev);
+  std::error_code check_transfer(std::uint8_t node) const;
   // The decoder or producer takes the PDO's configuration from pdo_table_.
   void refresh_pdo(std::uint8_t node, pdo::PdoKey key);
 
@@ -146,6 +182,9 @@ class Network : public DeadlineSource {
   time::TimeConsumer time_;
   pdo::RemotePdoTable pdo_table_;
   pdo::PdoConfigReader pdo_reader_;
+  master::DcfReader dcf_reader_;
+  master::DcfApplier dcf_applier_;
+  master::ProgramDownloader program_;
   // Nodes whose boot-up reads the PDO configuration -> NMT start afterwards.
   std::map<std::uint8_t, bool> boot_reads_;
 };

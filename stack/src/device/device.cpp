@@ -22,9 +22,11 @@ constexpr std::uint16_t kCommunicationFirst = 0x1000, kCommunicationLast = 0x1FF
 constexpr std::uint16_t kApplicationFirst = 0x2000, kApplicationLast = 0x9FFF;
 
 // Parameters are what a client may write; 1003h sub 0 (clears the history)
-// and 1010h/1011h (store/restore signatures) are commands, not settings.
+// and 1010h/1011h (store/restore signatures) are commands, not settings;
+// 1F50h-1F5Fh (CiA 302-3 program download) are the program and its
+// control, which a reset does not undo.
 bool is_parameter(std::uint16_t index, const od::SubEntry& e) {
-  if (index == 0x1003 || index == 0x1010 || index == 0x1011) return false;
+  if (index == 0x1003 || index == 0x1010 || index == 0x1011 || (index >= 0x1F50 && index <= 0x1F5F)) return false;
   return od::writable(e.access);
 }
 
@@ -34,6 +36,9 @@ std::optional<std::pair<std::uint16_t, std::uint16_t>> group_range(std::uint8_t 
     case 1: return std::pair{kCommunicationFirst, kApplicationLast};
     case 2: return std::pair{kCommunicationFirst, kCommunicationLast};
     case 3: return std::pair{kApplicationFirst, kApplicationLast};
+    // Sub 4..7Fh are manufacturer-specific groups (7.5.2.13); 4 is the
+    // manufacturer-specific profile area here.
+    case 4: return std::pair<std::uint16_t, std::uint16_t>{0x2000, 0x5FFF};
     default: return std::nullopt;
   }
 }

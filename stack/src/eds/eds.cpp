@@ -183,6 +183,7 @@ struct Template {
   bool pdo_mappable = false;
   std::optional<Value> low, high;
   Parsed def, param;
+  std::uint32_t obj_flags = 0;
 };
 
 constexpr std::array<std::string_view, 15> kObjectKeys = {
@@ -235,6 +236,7 @@ class Builder {
   void build_object(std::uint16_t index, const ObjSections& secs);  // skips (with a warning) what read_object cannot read
   void read_object(std::uint16_t index, const ObjSections& secs);
   Template read_template(const IniSection& s, bool domain_defaults);
+  std::uint32_t obj_flags(const IniSection& s);
   od::SubEntry finish(const Template& t, std::uint8_t sub, const Parsed* override_value);
   void check_in_limits(const Template& t, const Parsed& p) const;
   // [xxxxName] / [xxxxValue]: numbered entries 1..count.
@@ -248,6 +250,7 @@ class Builder {
   std::map<std::uint16_t, ObjSections> objs_;
   std::map<std::uint16_t, std::size_t> listed_;  // index -> line of its first list entry
   bool warned_param_in_eds_ = false;
+  std::uint16_t cur_index_ = 0;  // the object read_object() is building (for entry_facts)
   std::set<std::string> warned_kinds_;
 };
 
@@ -709,6 +712,21 @@ void Builder::check_in_limits(const Template& t, const Parsed& p) const {
   }
 }
 
+// CiA 306 ObjFlags: hints for tools, so a value that is no number ("NV")
+// is ignored with a warning instead of refusing the file.
+std::uint32_t Builder::obj_flags(const IniSection& s) {
+  const auto* e = s.find("objflags");
+  if (e == nullptr || e->value.empty()) return 0;
+  std::string what;
+  const auto bare = bare_number(e->value, &what);
+  auto v = parse_value(DataType::Unsigned32, bare ? std::string_view(*bare) : std::string_view(e->value));
+  if (!v) {
+    d_.warn(e->line, "ObjFlags '" + e->value + "' is not an UNSIGNED32; ignored");
+    return 0;
+  }
+  return static_cast<std::uint32_t>(std::get<std::uint64_t>(v->data));
+}
+
 Template Builder::read_template(const IniSection& s, bool domain_defaults) {
   Template t;
   const auto* name = s.find("parametername");
@@ -779,6 +797,7 @@ Template Builder::read_template(const IniSection& s, bool domain_defaults) {
     t.high.reset();
   }
 
+  t.obj_flags = obj_flags(s);
   t.def = parse_object_value(s.find("defaultvalue"), t.type);
   t.param = parse_object_value(s.find("parametervalue"), t.type);
   check_in_limits(t, t.def);
@@ -800,6 +819,13 @@ od::SubEntry Builder::finish(const Template& t, std::uint8_t sub, const Parsed* 
   e.low = t.low;
   e.high = t.high;
   e.default_value = t.def.value;
+  eds::EntryFacts& facts = out_.entry_facts[static_cast<std::uint32_t>(cur_index_) << 8 | sub];
+  facts.obj_flags = t.obj_flags;
+  facts.parameter_value = (override_value != nullptr && override_value->entry != nullptr) || t.param.entry != nullptr;
+  if (t.def.entry != nullptr) {
+    const std::string lower = to_lower(t.def.entry->value);
+    facts.hex_default = lower.find("0x") != std::string::npos;
+  }
   // The most specific value wins: [xxxxValue] entry, ParameterValue, DefaultValue.
   const Parsed* chosen = nullptr;
   for (const Parsed* p : {override_value, &t.param, &t.def}) {
@@ -821,9 +847,13 @@ od::SubEntry Builder::finish(const Template& t, std::uint8_t sub, const Parsed* 
 }
 
 void Builder::build_object(std::uint16_t index, const ObjSections& secs) {
+  cur_index_ = index;
   try {
     read_object(index, secs);
   } catch (const SkipObject& skip) {
+    // Facts of the sub-entries read before the object was given up.
+    const auto first = static_cast<std::uint32_t>(index) << 8;
+    out_.entry_facts.erase(out_.entry_facts.lower_bound(first), out_.entry_facts.lower_bound(first + 0x100));
     d_.warn(skip.line, skip.reason + "; object " + subject(*secs.main) + " left out");
   }
 }
@@ -934,6 +964,7 @@ void Builder::read_object(std::uint16_t index, const ObjSections& secs) {
       throw SkipObject{s.line, std::string(od::to_string(code)) + " object " + subject(s) + " has no sub-objects (no [" +
                                    hex4(index) + "subN] sections and no CompactSubObj)"};
     }
+    const std::uint32_t object_flags = obj_flags(s);  // the object section's apply to its sub-objects
     for (const auto& [sub, ss] : secs.subs) {
       warn_unknown_keys(*ss, kSubKeys);
       bool domain = false;
@@ -945,7 +976,9 @@ void Builder::read_object(std::uint16_t index, const ObjSections& secs) {
         }
         domain = c == 0x2;
       }
-      obj.subs.emplace(sub, finish(read_template(*ss, domain), sub, nullptr));
+      Template ts = read_template(*ss, domain);
+      ts.obj_flags |= object_flags;
+      obj.subs.emplace(sub, finish(ts, sub, nullptr));
     }
     if (!obj.subs.contains(0)) {
       const auto highest = obj.subs.rbegin()->first;

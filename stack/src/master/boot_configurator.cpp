@@ -4,6 +4,7 @@
 #include <string>
 #include <utility>
 
+#include "canopen/master/dcf_transfer.hpp"
 #include "canopen/sdo/abort.hpp"
 
 namespace canopen::master {
@@ -105,8 +106,30 @@ NodeBootConfig boot_config_from_dcf(const eds::DeviceDescription& dcf) {
   return c;
 }
 
-std::vector<ConfigWrite> plan_configuration(const eds::DeviceDescription& dcf) {
+std::vector<ConfigWrite> plan_configuration(const eds::DeviceDescription& dcf, PlanScope scope) {
   std::vector<ConfigWrite> out;
+  if (scope == PlanScope::AllValues) {
+    const auto has_value = [&](const od::Object* obj) {
+      if (obj == nullptr) return false;
+      for (const auto& [sub, e] : obj->subs)
+        if (dcf.facts(obj->index, sub).parameter_value) return true;
+      return false;
+    };
+    for (const auto& [index, obj] : dcf.od.objects()) {
+      if (is_pdo_area(index)) {
+        if (is_pdo_comm(index) &&
+            (has_value(&obj) || has_value(dcf.od.find(static_cast<std::uint16_t>(index + 0x200)))))
+          plan_pdo(dcf, obj, out);
+        continue;
+      }
+      for (const auto& [sub, e] : obj.subs) {
+        const eds::EntryFacts f = dcf.facts(index, sub);
+        if (!f.parameter_value || (f.obj_flags & eds::kObjFlagRefuseWriteOnDownload) != 0) continue;
+        if (is_configuration_entry(index, e)) out.push_back({index, sub, encode(e.value), false});
+      }
+    }
+    return out;
+  }
   for (const auto& [index, obj] : dcf.od.objects()) {
     if (is_pdo_area(index)) {
       if (is_pdo_comm(index)) plan_pdo(dcf, obj, out);

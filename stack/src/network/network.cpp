@@ -34,7 +34,12 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
               rpdo_.on_sync(ev.counter, now_);  // synchronous RPDO data goes out on this SYNC
             }),
       time_(own, [this](const TimeEvent& ev) { emit(ev, frame_time_); }),
-      pdo_reader_(sdo_, [this] { return now_; }) {
+      pdo_reader_(sdo_, [this] { return now_; }),
+      dcf_reader_(sdo_, [this](const TransferEvent& ev) { emit(ev, wall_()); }, [this] { return now_; }),
+      dcf_applier_(
+          sdo_, [this](NmtCommand cmd, std::uint8_t n) { nmt_.send_command(cmd, n); },
+          [this](const TransferEvent& ev) { emit(ev, wall_()); }, [this] { return now_; }),
+      program_(sdo_, [this](const TransferEvent& ev) { emit(ev, wall_()); }, [this] { return now_; }) {
   pdo_.set_sync_window([this](TimePoint now) { return sync_.in_sync_window(now); });
   sdo_.set_download_observer([this](std::uint8_t node, const sdo::Multiplexer& mux, const Bytes& data) {
     if (auto key = pdo_table_.apply_download(node, mux.index, mux.sub, data)) refresh_pdo(node, *key);
@@ -145,6 +150,38 @@ std::error_code Network::read_pdo_config(std::uint8_t node, pdo::PdoConfigReader
         if (done) done(r);
       },
       now);
+}
+
+std::error_code Network::check_transfer(std::uint8_t node) const {
+  if (node < 1 || node > 127) return make_error_code(master::TransferError::BadNode);
+  if (transfer_busy(node)) return make_error_code(master::TransferError::Busy);
+  return {};
+}
+
+bool Network::transfer_busy(std::uint8_t node) const {
+  return dcf_reader_.busy(node) || dcf_applier_.busy(node) || program_.busy(node);
+}
+
+std::error_code Network::read_dcf(std::uint8_t node, const eds::DeviceDescription& description,
+                                  master::DcfReader::Done done, TimePoint now) {
+  if (auto ec = check_transfer(node)) return ec;
+  return dcf_reader_.start(node, description, std::move(done), now);
+}
+
+std::error_code Network::apply_dcf(std::uint8_t node, const eds::DeviceDescription& dcf,
+                                   master::DcfApplyOptions options, master::DcfApplier::Done done, TimePoint now) {
+  if (auto ec = check_transfer(node)) return ec;
+  return dcf_applier_.start(node, dcf, options, std::move(done), now);
+}
+
+std::error_code Network::download_program(std::uint8_t node, master::ProgramDownloadOptions options, Bytes image,
+                                          master::ProgramDownloader::Done done, TimePoint now) {
+  if (auto ec = check_transfer(node)) return ec;
+  return program_.start(node, options, std::move(image), std::move(done), now);
+}
+
+bool Network::cancel_transfer(std::uint8_t node, TimePoint now) {
+  return dcf_reader_.cancel(node, now) || dcf_applier_.cancel(node, now) || program_.cancel(node, now);
 }
 
 void Network::refresh_pdo(std::uint8_t node, pdo::PdoKey key) {

@@ -331,6 +331,18 @@ void add_pdo(ObjectDictionary& od, std::uint8_t node_id, unsigned n, bool tpdo) 
 
 }  // namespace
 
+void install_store_restore(ObjectDictionary& od, std::function<std::error_code(std::uint8_t sub)> on_store,
+                           std::function<std::error_code(std::uint8_t sub)> on_restore) {
+  if (od.find(0x1010) != nullptr) {
+    od.on_read(0x1010, read_store_capability);
+    od.on_write(0x1010, signature_hook(kSaveSignature, std::move(on_store)));
+  }
+  if (od.find(0x1011) != nullptr) {
+    od.on_read(0x1011, read_store_capability);
+    od.on_write(0x1011, signature_hook(kLoadSignature, std::move(on_restore)));
+  }
+}
+
 ObjectDictionary make_gateway_dictionary(std::uint8_t node_id, const GatewayIdentity& identity,
                                          const GatewayDictionaryOptions& options) {
   assert(node_id >= 1 && node_id <= 127 && "node-ID out of 1..127");
@@ -394,10 +406,8 @@ ObjectDictionary make_gateway_dictionary(std::uint8_t node_id, const GatewayIden
       s.default_value = s.value;
     }
     od.insert(std::move(obj));
-    od.on_read(index, read_store_capability);
-    od.on_write(index, store ? signature_hook(kSaveSignature, options.on_store)
-                             : signature_hook(kLoadSignature, options.on_restore));
   }
+  install_store_restore(od, options.on_store, options.on_restore);
 
   // 7.5.2.15 COB-ID TIME: 100h, neither consumer (bit 31) nor producer (bit 30).
   od.insert(make_var(0x1012, "COB-ID TIME", DataType::Unsigned32, rw, u32(0x100)));

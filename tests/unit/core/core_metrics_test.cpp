@@ -53,5 +53,23 @@ TEST(CoreMetrics, FamiliesFollowTheCountersAfterRegistration) {
   EXPECT_EQ(buckets, Counters::kSdoLatencyBounds.size() + 1);
 }
 
+// Contract "Remote configuration and maintenance": program downloads and
+// DCF transfers counted by operation and result, every series from the start.
+TEST(CoreMetrics, MaintenanceOperationsByOperationAndResult) {
+  Counters c;
+  metrics::Registry r;
+  register_metrics(r, c);
+  EXPECT_TRUE(has_line(r.render(),
+                       "canopen_gateway_maintenance_operations_total{operation=\"program-download\",result=\"failed\"} 0"));
+  c.maintenance[Counters::program_download][Counters::ok] = 2;
+  c.maintenance[Counters::dcf_read][Counters::busy] = 1;
+  const std::string text = r.render();
+  EXPECT_TRUE(has_line(text,
+                       "canopen_gateway_maintenance_operations_total{operation=\"program-download\",result=\"ok\"} 2"))
+      << text;
+  EXPECT_TRUE(
+      has_line(text, "canopen_gateway_maintenance_operations_total{operation=\"dcf-read\",result=\"busy\"} 1"));
+}
+
 }  // namespace
 }  // namespace gateway::core

@@ -15,6 +15,7 @@
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/sdo/abort.hpp"
+#include "support/core_rig.hpp"
 #include "support/fake_networks.hpp"
 
 namespace gateway::core {
@@ -27,56 +28,10 @@ using test_support::FakeNetworks;
 using test_support::kDescribed;
 using test_support::kOwnNode;
 
-struct Rig {
-  explicit Rig(RequestCore::Settings s = {}, std::vector<auth::TokenEntry> t = {})
-      : tokens(std::move(t)), core(nets, tokens, s, [this](const std::string& l) { audit.push_back(l); }) {}
-
-  // Executes and returns where the result will be.
-  std::shared_ptr<std::optional<Result>> run(Request r) {
-    auto out = std::make_shared<std::optional<Result>>();
-    core.execute(std::move(r), [out](Result res) {
-      EXPECT_FALSE(out->has_value()) << "answered twice";
-      *out = std::move(res);
-    });
-    return out;
-  }
-  bool audited(std::string_view part) const {
-    for (const auto& l : audit)
-      if (l.find(part) != std::string::npos) return true;
-    return false;
-  }
-
-  FakeNetworks nets;
-  auth::TokenStore tokens;
-  std::vector<std::string> audit;
-  RequestCore core;
-};
-
-Caller checked(Role role, std::string key = "address 10.0.0.7", std::string who = "op@10.0.0.7") {
-  Caller c;
-  c.authenticated = true;
-  c.role = role;
-  c.key = std::move(key);
-  c.who = std::move(who);
-  return c;
-}
-
-Request request(Command cmd, Caller caller = checked(Role::Admin), std::uint32_t net = 1) {
-  Request r;
-  r.caller = std::move(caller);
-  r.network = net;
-  r.command = std::move(cmd);
-  return r;
-}
-
-const Problem& problem_of(const std::shared_ptr<std::optional<Result>>& r) {
-  static const Problem none{0, "no problem", {}, {}, {}, 0, true, {}};
-  if (!r->has_value() || !std::holds_alternative<Problem>(**r)) {
-    ADD_FAILURE() << "not a problem";
-    return none;
-  }
-  return std::get<Problem>(**r);
-}
+using test_support::checked;
+using test_support::problem_of;
+using test_support::request;
+using test_support::Rig;
 
 TEST(RequestCoreAddress, UnknownNetworkIs404AndOutOfRangeNodes400) {
   Rig rig;

@@ -54,9 +54,9 @@ TEST(EdsIoModule, LoadsWithoutWarnings) {
   EXPECT_EQ(d.dummy_usage, (std::vector<std::uint16_t>{2, 3, 4, 5, 6, 7}));
   EXPECT_EQ(d.comments.size(), 3u);
   EXPECT_EQ(d.mandatory_objects, (std::vector<std::uint16_t>{0x1000, 0x1001, 0x1018}));
-  EXPECT_EQ(d.optional_objects.size(), 45u);
+  EXPECT_EQ(d.optional_objects.size(), 49u);  // with the CiA 302-3 program objects 1F50h/1F51h/1F56h/1F57h
   EXPECT_EQ(d.manufacturer_objects.size(), 6u);
-  EXPECT_EQ(d.od.objects().size(), 3u + 45u + 6u);
+  EXPECT_EQ(d.od.objects().size(), 3u + 49u + 6u);
 }
 
 TEST(EdsIoModule, CommunicationObjects) {

@@ -463,5 +463,36 @@ TEST(EdsParse, ErrorWhatIsFileLineReason) {
   EXPECT_EQ(e.reason(), "something is wrong");
 }
 
+// CiA 306 4.6.3: ObjFlags (bit 0 refuse write on download, bit 1 refuse
+// read on scan) of the object section reach its sub-objects; whether a DCF
+// entry carried a ParameterValue, and whether its default was written in
+// hex, are kept for DCF read-back and apply (master/dcf_transfer.hpp).
+TEST(EdsParse, EntryFacts_ObjFlagsParameterValueAndHexDefault) {
+  const auto d = parse(file_with("[DeviceComissioning]\nNodeID=5\n"
+                                 "[2000]\nParameterName=Flagged\nObjectType=0x7\nDataType=0x0006\nAccessType=rw\n"
+                                 "DefaultValue=0x10\nParameterValue=17\nObjFlags=0x2\n"
+                                 "[2001]\nParameterName=Rec\nObjectType=0x9\nSubNumber=2\nObjFlags=1\n"
+                                 "[2001sub0]\nParameterName=n\nObjectType=0x7\nDataType=0x0005\nAccessType=ro\nDefaultValue=1\n"
+                                 "[2001sub1]\nParameterName=v\nObjectType=0x7\nDataType=0x0007\nAccessType=rw\n"
+                                 "DefaultValue=7\nObjFlags=0x2\n"
+                                 "[2002]\nParameterName=Odd\nObjectType=0x7\nDataType=0x0005\nAccessType=rw\n"
+                                 "DefaultValue=3\nObjFlags=NV\n",
+                                 {0x2000, 0x2001, 0x2002}),
+                       {}, "test.dcf");
+  const EntryFacts flagged = d.facts(0x2000, 0);
+  EXPECT_EQ(flagged.obj_flags, kObjFlagRefuseReadOnScan);
+  EXPECT_TRUE(flagged.parameter_value);
+  EXPECT_TRUE(flagged.hex_default);
+  EXPECT_EQ(d.od.find(0x2000, 0)->value, Value::of_unsigned(DataType::Unsigned16, 17));
+  EXPECT_EQ(d.facts(0x2001, 1).obj_flags, kObjFlagRefuseWriteOnDownload | kObjFlagRefuseReadOnScan);
+  EXPECT_EQ(d.facts(0x2001, 0).obj_flags, kObjFlagRefuseWriteOnDownload);
+  EXPECT_FALSE(d.facts(0x2001, 1).parameter_value);
+  EXPECT_FALSE(d.facts(0x2001, 1).hex_default);
+  // Vendor junk in a hint: ignored with a warning, the file is read.
+  EXPECT_EQ(d.facts(0x2002, 0).obj_flags, 0U);
+  EXPECT_TRUE(has_warning(d, "ObjFlags 'NV'"));
+  EXPECT_EQ(d.facts(0x3000, 0).obj_flags, 0U) << "no such entry: no facts";
+}
+
 }  // namespace
 }  // namespace canopen::eds::test

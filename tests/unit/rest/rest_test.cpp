@@ -487,6 +487,7 @@ TEST(Rest, MetricsFamiliesInTheirOrder) {
       "canopen_gateway_sdo_timeouts_total", "canopen_gateway_nmt_commands_total", "canopen_gateway_sdo_latency_seconds",
       "canopen_gateway_request_auth_failures_total", "canopen_gateway_requests_limited_total",
       "canopen_gateway_lss_operations_total", "canopen_gateway_lss_node_ids_assigned_total",
+      "canopen_gateway_maintenance_operations_total",
       "canopen_gateway_events_published_total", "canopen_gateway_mqtt_enabled", "canopen_gateway_websocket_clients",
       "canopen_gateway_websocket_messages_total", "canopen_gateway_http_responses_total",
       "canopen_gateway_http_connections", "canopen_gateway_http_connections_refused_total",

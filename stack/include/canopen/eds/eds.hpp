@@ -117,6 +117,17 @@ struct Commissioning {
   std::optional<std::uint32_t> lss_serial_number;
 };
 
+// CiA 306 ObjFlags bits: hints for configuration tools.
+inline constexpr std::uint32_t kObjFlagRefuseWriteOnDownload = 0x1;  // bit 0: do not write it in a DCF download
+inline constexpr std::uint32_t kObjFlagRefuseReadOnScan = 0x2;       // bit 1: do not read it when scanning a device
+
+// What the file says about one sub-entry that the dictionary does not keep.
+struct EntryFacts {
+  std::uint32_t obj_flags = 0;   // ObjFlags of the object section and of the sub-object section, OR-ed
+  bool parameter_value = false;  // a ParameterValue or [xxxxValue] entry gave the value
+  bool hex_default = false;      // DefaultValue was written in hex (0x...)
+};
+
 struct DeviceDescription {
   FileInfo file;
   DeviceInfo device;
@@ -142,6 +153,13 @@ struct DeviceDescription {
   std::vector<std::string> comments;                                 // [Comments] Line1..LineN
   std::map<std::uint16_t, std::vector<std::uint16_t>> object_links;  // [xxxxObjectLinks]
   std::vector<std::string> warnings;                                 // harmless oddities, each "file:line: text"
+  // Per sub-entry of `od`, key index << 8 | sub; see facts().
+  std::map<std::uint32_t, EntryFacts> entry_facts;
+  // The facts of an entry; all defaults for an entry not in the file.
+  EntryFacts facts(std::uint16_t index, std::uint8_t sub) const {
+    const auto it = entry_facts.find(static_cast<std::uint32_t>(index) << 8 | sub);
+    return it == entry_facts.end() ? EntryFacts{} : it->second;
+  }
 };
 
 // Reads and parses a file; file names in messages are path.string().

@@ -97,7 +97,14 @@ struct ConfigWrite {
 //     (entries without DefaultValue are not written: the reader cannot tell
 //     a ParameterValue from the type's zero there). 1010h and 1011h are never
 //     written: their writes store or restore parameters.
-std::vector<ConfigWrite> plan_configuration(const eds::DeviceDescription& dcf);
+// With PlanScope::AllValues (DCF apply, dcf_transfer.hpp) instead: only
+// the configurable entries (configurable_objects() rules, less ObjFlags
+// bit 1, plus bit 0 "refuse write on download") that carry a
+// ParameterValue, every one of them whatever its DefaultValue; a PDO is
+// written whole (as above) when any entry of its communication or mapping
+// object carries one, else not at all; 1017h gets no special case.
+enum class PlanScope : std::uint8_t { Changed, AllValues };
+std::vector<ConfigWrite> plan_configuration(const eds::DeviceDescription& dcf, PlanScope scope = PlanScope::Changed);
 
 class BootConfigurator {
  public:

@@ -38,6 +38,15 @@ struct GatewayDictionaryOptions {
   std::function<std::error_code(std::uint8_t sub)> on_restore = nullptr;
 };
 
+// The store/restore behaviour of 7.5.2.13/7.5.2.14 on the 1010h and 1011h
+// a dictionary already has (either may be absent): reading sub N (N >= 1)
+// answers 1 (stores on command only); writing "save" (65766173h) to 1010h
+// sub N calls on_store(N), "load" (64616F6Ch) to 1011h sub N on_restore(N),
+// whose error aborts the download; any other value aborts 08000020h. The
+// gateway's own dictionary uses it, and so do the simulated devices.
+void install_store_restore(ObjectDictionary& od, std::function<std::error_code(std::uint8_t sub)> on_store,
+                           std::function<std::error_code(std::uint8_t sub)> on_restore);
+
 // Builds the dictionary for `node_id` (1..127): 1000h, 1001h, 1003h, 1005h,
 // 1006h, 1007h, 1008h-100Ah, 100Ch, 100Dh, 1010h, 1011h, 1012h-1019h, 1200h,
 // 1280h..., 1400h/1600h, 1800h/1A00h, with hooks enforcing the value rules.
