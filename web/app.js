@@ -1550,9 +1550,11 @@ async function applyDcf() {
       const bar = $('#dcf-bar');
       if (bar.max > 1) bar.value = bar.max;
     }
+    const storeError = r && r.storeError ? `; store failed: ${r.storeError.error || 'failed'}` +
+      `${r.storeError.abortCode ? ` (${r.storeError.abortCode})` : ''}` : '';
     const extra = [r && r.stored ? 'stored' : null, r && r.reset ? 'node reset' : null].filter(Boolean).join(', ');
     const text = `${objects.length - failed.length} of ${objects.length} objects written${extra ? ', ' + extra : ''}`;
-    if (failed.length) throw new Error(`${text}; ${failed.length} failed (highlighted below)`);
+    if (failed.length || storeError) throw new Error(`${text}${failed.length ? `; ${failed.length} failed (highlighted below)` : ''}${storeError}`);
     return text + '.';
   });
 }

@@ -689,17 +689,24 @@ async function partConfig() {
   check(!readBar.hidden && readBar.max > 1 && readBar.value === readBar.max,
     `the read-back's progress bar is full (${readBar.value}/${readBar.max} objects)`);
 
-  // Changed in one value (1017h, the producer heartbeat time), it is shown
-  // against the EDS default, then applied: one result per object.
+  // Changed in one value (1017h, the producer heartbeat time), and with a
+  // value for 1000h (device type) claimed writable as a DCF of another
+  // device revision might: both are shown against the EDS defaults, then
+  // applied with one result per object; the device refuses 1000h (CiA 301
+  // abort 0601 0002h, read-only), which is highlighted, the rest is written.
   const hbNow = (await getJson(base, '/networks/1/nodes/10/sdo/1017/0')).value;
   const hbNew = hbNow === 700 ? 800 : 700;
-  const changed = dcf.replace(/(\[1017\][^[]*?ParameterValue=)[^\r\n]*/i, `$1${hbNew}`);
+  const changed = dcf.replace(/(\[1017\][^[]*?ParameterValue=)[^\r\n]*/i, `$1${hbNew}`)
+    .replace(/(\[1000\][^[]*?AccessType=)ro([^[]*?\r?\n)(\r?\n|$)/i, '$1rw$2ParameterValue=0x12345\n$3');
+  check(changed !== dcf && /\[1000\][^[]*ParameterValue=0x12345/.test(changed), 'the DCF was changed in 1017h and 1000h');
   await page.setInputFiles('#dcf-file', { name: 'node10-changed.dcf', mimeType: 'text/plain', buffer: Buffer.from(changed) });
   await page.waitForSelector('#dcf-diff-body tr[data-obj="1017:0"]');
   const diffRow = await page.$eval('#dcf-diff-body tr[data-obj="1017:0"]', (r) =>
     ({ diff: r.dataset.diff, cells: [...r.cells].map((c) => c.textContent) }));
   check(diffRow.diff === '1' && diffRow.cells[3] === `${hbNew} (0x${hbNew.toString(16).toUpperCase().padStart(4, '0')})`,
     `the diff shows 1017h against its EDS default: ${diffRow.cells.join(' | ')}`);
+  const devType = await page.$eval('#dcf-diff-body tr[data-obj="1000:0"]', (r) => r.dataset.diff);
+  check(devType === '1', 'and 1000h too');
   check(/differ from the EDS defaults/.test(await page.textContent('#dcf-diff-summary')),
     `with a summary: ${await page.textContent('#dcf-diff-summary')}`);
   await page.click('#dcf-apply');
@@ -708,8 +715,15 @@ async function partConfig() {
   const results = await page.$$eval('#dcf-results-body tr[data-obj]', (rows) =>
     rows.map((r) => ({ obj: r.dataset.obj, result: r.dataset.result, text: r.cells[2].textContent })));
   const hbResult = results.find((r) => r.obj === '1017:0');
-  check(results.length > 1 && hbResult.result === 'ok',
-    `the apply lists ${results.length} objects, 1017h ${hbResult.text} (${await page.textContent('#dcf-status')})`);
+  const refusedRow = results.find((r) => r.obj === '1000:0');
+  const applyStatus = await page.textContent('#dcf-status');
+  check(results.length > 2 && hbResult.result === 'ok' && results.filter((r) => r.result === 'failed').length === 1,
+    `the apply lists ${results.length} objects, 1017h ${hbResult.text} (${applyStatus})`);
+  const highlight = await page.$eval('#dcf-results-body tr[data-obj="1000:0"] td', (td) =>
+    [getComputedStyle(td).backgroundColor, getComputedStyle(document.querySelector('#dcf-results-body tr[data-result="ok"] td')).backgroundColor]);
+  check(refusedRow.result === 'failed' && /0x06010002/.test(refusedRow.text) && highlight[0] !== highlight[1] &&
+        /1 failed/.test(applyStatus),
+    `1000h's refusal is highlighted (${highlight[0]}) with its abort code: ${refusedRow.text}`);
   const hbAfter = (await getJson(base, '/networks/1/nodes/10/sdo/1017/0')).value;
   check(hbAfter === hbNew, `node 10's 1017h is ${hbNew} now (${hbAfter})`);
   await shot(page, 'dashboard-config-dcf.png');
