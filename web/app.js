@@ -1287,6 +1287,8 @@ async function loadConfig(id) {
   cfg.bootTouched = false;
   $('#cfg-source').dataset.source = r.source || '';
   setText($('#cfg-source'), r.source ? `(${SOURCE_TEXT[r.source] || r.source})` : '');
+  $('#cfg-source').title = r.file ? `kept in ${r.file}` : '';
+  $('#cfg-revert').hidden = r.source !== 'state-dir';
   $('#cfg-name').value = settings.name ?? '';
   setText($('#cfg-file'), settings.dcf ?? settings.eds ?? 'none (values arrive raw)');
   const hb = settings['heartbeat-consumer-ms'];
@@ -1330,6 +1332,20 @@ function saveConfig() {
   });
 }
 
+// DELETE config: state-dir's settings and file go, the configuration file's apply again.
+async function revertConfig() {
+  const id = state.selected;
+  if (!await confirmDialog(`Revert node ${id} to the configuration file?`,
+    'The settings changed at run time and an uploaded EDS/DCF are dropped; the configuration file\'s settings ' +
+    'for this node apply again at once (a node only configured at run time is no longer configured).', 'Revert')) return;
+  return cfgRun('Reverting', id, '#cfg-status', async () => {
+    await roleApi('admin', 'DELETE', nodePath(id, 'config'));
+    forgetNode(id);
+    await loadConfig(id);
+    return 'Reverted: the configuration file\'s settings apply.';
+  });
+}
+
 // The node's file or name changed: its dictionary and row are loaded again.
 function forgetNode(id) {
   state.od.delete(id);
@@ -1343,12 +1359,14 @@ function uploadEds() {
   if (!file) return;
   return cfgRun(`Uploading ${file.name}`, id, '#eds-status', async () => {
     const text = await file.text();
-    await roleApi('admin', 'PUT', `${nodePath(id, 'eds')}?name=${encodeURIComponent(file.name)}`, text,
-                  { contentType: FILE_TYPE });
+    const r = await roleApi('admin', 'PUT', `${nodePath(id, 'eds')}?name=${encodeURIComponent(file.name)}`, text,
+                            { contentType: FILE_TYPE });
     $('#eds-file').value = '';
     forgetNode(id);
     await loadConfig(id);
-    return `${file.name} accepted and in use (object dictionary reloaded).`;
+    const warnings = (r && r.warnings) || [];
+    return `${file.name} accepted and in use (object dictionary reloaded).` +
+      (warnings.length ? `\nWarnings:\n${warnings.map((w) => (typeof w === 'string' ? w : w.message || JSON.stringify(w))).join('\n')}` : '');
   });
 }
 
@@ -1615,6 +1633,7 @@ function onTransfer(ev) {
 function setupConfig() {
   $('#cfg-form').addEventListener('submit', (e) => { e.preventDefault(); if (state.selected !== null) saveConfig(); });
   $('#cfg-reload').addEventListener('click', () => { if (state.selected !== null) loadConfig(state.selected); });
+  $('#cfg-revert').addEventListener('click', revertConfig);
   for (const c of document.querySelectorAll('#cfg-form [data-boot]')) c.addEventListener('change', () => { cfg.bootTouched = true; });
   $('#eds-file').addEventListener('change', updateConfigButtons);
   $('#prog-file').addEventListener('change', updateConfigButtons);

@@ -661,16 +661,18 @@ async function partConfig() {
   // Settings: a bad value is refused with the validator's reason and changes
   // nothing; a good one is used at once and comes from state-dir from then on.
   const errorsBefore = consoleErrors.length;
+  const hbConsumer = (await getJson(base, '/networks/1/nodes/10/config')).settings['heartbeat-consumer-ms'];
+  check(await page.inputValue('#cfg-hb') === String(hbConsumer), `the form shows the heartbeat consumer time (${hbConsumer})`);
   await page.fill('#cfg-hb', 'soon');
   await page.click('#cfg-save');
   await page.waitForSelector('#cfg-status[data-kind="error"]');
   const refused = await page.textContent('#cfg-status');
   check(/^Refused: .*soon/.test(refused), `a bad heartbeat consumer time is refused readably (${refused})`);
   const kept = (await getJson(base, '/networks/1/nodes/10/config')).settings['heartbeat-consumer-ms'];
-  check(kept === 'auto', `and nothing changed (heartbeat-consumer-ms ${kept})`);
+  check(kept === hbConsumer, `and nothing changed (heartbeat-consumer-ms ${kept})`);
   const badSaves = consoleErrors.splice(errorsBefore);
   check(badSaves.every((e) => /status of 400/.test(e)), `only the refused PUT's 400 was logged (${badSaves.length})`);
-  await page.fill('#cfg-hb', 'auto');
+  await page.fill('#cfg-hb', String(hbConsumer));
   await page.fill('#cfg-name', 'conveyor-io');
   await page.click('#cfg-save');
   await page.waitForSelector('#cfg-status[data-kind="ok"]');
@@ -762,6 +764,35 @@ async function partConfig() {
   await page.click('#node-store');
   await page.waitForSelector('#store-status[data-kind="ok"]');
   check(posts.length === 1, `Store saves the parameters: ${await page.textContent('#store-status')}`);
+
+
+  // EDS upload to node 11: a broken file is refused with FILE:LINE: reason
+  // and changes nothing; a good one is the node's description at once (its
+  // dictionary is loaded again) and kept in state-dir.
+  await selectNode(page, 11);
+  await page.waitForSelector('#panel-config[data-node="11"] #cfg-source[data-source="config"]');
+  const eds = fs.readFileSync(path.join(here, '..', '..', 'deploy', 'eds', 'cia401-io-module.eds'), 'utf8');
+  const broken = eds.replace(/(\[1001\][^[]*?DefaultValue=)[^\r\n]*/i, '$10x1FF');
+  check(broken !== eds, 'a broken EDS: 1001h (UNSIGNED8) with the default 0x1FF');
+  const errorsBeforeEds = consoleErrors.length;
+  await page.setInputFiles('#eds-file', { name: 'io-broken.eds', mimeType: 'application/octet-stream', buffer: Buffer.from(broken) });
+  await page.click('#eds-upload');
+  await page.waitForSelector('#eds-status[data-kind="error"]');
+  const edsRefused = await page.textContent('#eds-status');
+  check(/^Refused: io-broken\.eds:\d+: .*0x1FF/.test(edsRefused), `the broken EDS is refused with FILE:LINE: reason (${edsRefused})`);
+  check((await getJson(base, '/networks/1/nodes/11/config')).source === 'config', 'and node 11 keeps its settings');
+  const edsErrors = consoleErrors.splice(errorsBeforeEds);
+  check(edsErrors.every((e) => /status of 400/.test(e)), `only the refused upload's 400 was logged (${edsErrors.length})`);
+  const odLoads = [];
+  page.on('request', (r) => { if (/\/nodes\/11\/od$/.test(new URL(r.url()).pathname)) odLoads.push(r.url()); });
+  await page.setInputFiles('#eds-file', { name: 'io-module.eds', mimeType: 'application/octet-stream', buffer: Buffer.from(eds) });
+  await page.click('#eds-upload');
+  await page.waitForSelector('#eds-status[data-kind="ok"]');
+  await page.waitForFunction(() => /state directory/.test(document.querySelector('#cfg-source').textContent));
+  await page.waitForSelector('#od-body tr[data-od="1017:0"]');
+  const usedFile = await page.textContent('#cfg-file');
+  check(odLoads.length > 0 && /net1-node11\.eds$/.test(usedFile),
+    `the good EDS is in use (${await page.textContent('#eds-status')}), kept as ${usedFile}, the dictionary reloaded`);
 
   check(consoleErrors.length === 0, `no errors in the browser console${consoleErrors.length ? ': ' + consoleErrors.join(' | ') : ''}`);
   await ctx.close();
