@@ -624,14 +624,18 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
       });
     };
     auto self = shared_from_this();
+    // The wait also keeps the connection alive while the handler runs; with
+    // no timeout it never expires (reply() cancels it).
     if (timeout.count() > 0) {
       handler_timer_.expires_after(timeout);
-      handler_timer_.async_wait([self, pending](error_code ec) {
-        if (ec || pending->done.exchange(true)) return;
-        self->impl_->debug("handler for " + self->peer_ + " did not answer in time");
-        self->reply(pending, Response::problem(500, "the request handler did not answer in time"));
-      });
+    } else {
+      handler_timer_.expires_at(SteadyTime::max());
     }
+    handler_timer_.async_wait([self, pending](error_code ec) {
+      if (ec || pending->done.exchange(true)) return;
+      self->impl_->debug("handler for " + self->peer_ + " did not answer in time");
+      self->reply(pending, Response::problem(500, "the request handler did not answer in time"));
+    });
     try {
       handler(*req, std::move(responder));
     } catch (const std::exception& e) {
@@ -743,7 +747,10 @@ class HttpSession final : public Connection {
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(impl_->cfg.max_header_bytes));
     body_limit_ = impl_->cfg.max_body_bytes;
-    parser_->body_limit(body_limit_);
+    // Beast checks a Content-Length against the limit while it parses the
+    // header, before the route is known: the largest any route takes here,
+    // the route's own in on_header().
+    parser_->body_limit(std::max<std::uint64_t>(body_limit_, impl_->router.max_body_bytes()));
     if (buffer_.size() > 0) {  // pipelined: the next request has begun
       read_header();
       return;
@@ -791,10 +798,14 @@ class HttpSession final : public Connection {
     }
     // A route with its own body limit (an upload) gets it before its body
     // is read; every other request keeps the server's.
-    if (const auto* opts = route_options(req); opts != nullptr && opts->max_body_bytes > 0) {
+    if (const auto* opts = route_options(req); opts != nullptr && opts->max_body_bytes > 0)
       body_limit_ = opts->max_body_bytes;
-      parser_->body_limit(body_limit_);
+    if (const auto length = parser_->content_length(); length && *length > body_limit_) {
+      keep_alive_ = false;  // the body is not read
+      send(Response::problem(413, "request body larger than " + std::to_string(body_limit_) + " bytes"));
+      return;
     }
+    parser_->body_limit(body_limit_);  // a chunked body counts against it as it comes
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     if (!parser_->is_done() && iequals(req[bhttp::field::expect], "100-continue")) {
       // curl and others wait for this before sending a larger body.
