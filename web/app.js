@@ -1161,7 +1161,7 @@ function lssAssignAll() {
 
 const cfg = {
   settings: null,          // the node's settings as GET config answered them
-  bootTouched: false,      // a boot checkbox was changed since the last load
+  bootTouched: new Set(),  // boot keys whose checkbox was changed since the last load
   busy: null,              // the running operation's name, or null
   dcf: null,               // {name, text, rows} of the chosen DCF file
 };
@@ -1284,7 +1284,7 @@ async function loadConfig(id) {
   cfgStatus('#cfg-status', '');
   const settings = r.settings && typeof r.settings === 'object' ? r.settings : {};
   cfg.settings = settings;
-  cfg.bootTouched = false;
+  cfg.bootTouched = new Set();
   $('#cfg-source').dataset.source = r.source || '';
   setText($('#cfg-source'), r.source ? `(${SOURCE_TEXT[r.source] || r.source})` : '');
   $('#cfg-source').title = r.file ? `kept in ${r.file}` : '';
@@ -1312,10 +1312,13 @@ function settingsFromForm() {
   const guard = $('#cfg-guard').value.trim(), life = $('#cfg-life').value.trim();
   if (guard === '' && life === '') delete s.guarding;
   else s.guarding = { 'guard-time-ms': guard === '' ? 0 : Number(guard), 'life-time-factor': life === '' ? 0 : Number(life) };
-  if (s.boot || cfg.bootTouched) {
-    s.boot = { ...(s.boot || {}) };
-    for (const c of document.querySelectorAll('#cfg-form [data-boot]')) s.boot[c.dataset.boot] = c.checked;
+  // Only the boot keys the node had or the user changed: an absent key
+  // keeps its default (read-pdo-config has no plain false one).
+  const boot = { ...(s.boot || {}) };
+  for (const c of document.querySelectorAll('#cfg-form [data-boot]')) {
+    if (c.dataset.boot in boot || cfg.bootTouched.has(c.dataset.boot)) boot[c.dataset.boot] = c.checked;
   }
+  if (Object.keys(boot).length) s.boot = boot;
   const metrics = $('#cfg-metrics').value.split(/[\s,]+/).filter(Boolean);
   put('sparkplug-metrics', metrics.length ? metrics : undefined);
   return s;
@@ -1634,7 +1637,7 @@ function setupConfig() {
   $('#cfg-form').addEventListener('submit', (e) => { e.preventDefault(); if (state.selected !== null) saveConfig(); });
   $('#cfg-reload').addEventListener('click', () => { if (state.selected !== null) loadConfig(state.selected); });
   $('#cfg-revert').addEventListener('click', revertConfig);
-  for (const c of document.querySelectorAll('#cfg-form [data-boot]')) c.addEventListener('change', () => { cfg.bootTouched = true; });
+  for (const c of document.querySelectorAll('#cfg-form [data-boot]')) c.addEventListener('change', () => cfg.bootTouched.add(c.dataset.boot));
   $('#eds-file').addEventListener('change', updateConfigButtons);
   $('#prog-file').addEventListener('change', updateConfigButtons);
   $('#eds-upload').addEventListener('click', uploadEds);
