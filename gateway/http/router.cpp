@@ -30,7 +30,6 @@ void Router::add(std::string method, std::string_view pattern, Handler handler, 
     if (o.method == r.method && o.pattern == r.pattern) throw std::invalid_argument("duplicate route " + r.pattern);
   r.handler = std::move(handler);
   r.options = std::move(options);
-  if (r.options.max_body_bytes > max_body_bytes_) max_body_bytes_ = r.options.max_body_bytes;
   routes_.push_back(std::move(r));
 }
 

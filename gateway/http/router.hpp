@@ -39,8 +39,6 @@ class Router {
   Match match(std::string_view method, const std::vector<std::string>& segments) const;
 
   bool empty() const { return routes_.empty(); }
-  // The largest RouteOptions::max_body_bytes of any route (0: none sets one).
-  std::size_t max_body_bytes() const { return max_body_bytes_; }
   // (method, pattern) of every route, in the order added.
   std::vector<std::pair<std::string, std::string>> list() const;
 
@@ -60,7 +58,6 @@ class Router {
   static bool more_specific(const Route& a, const Route& b);
 
   std::vector<Route> routes_;
-  std::size_t max_body_bytes_ = 0;
 };
 
 }  // namespace gateway::http

@@ -747,10 +747,10 @@ class HttpSession final : public Connection {
     parser_.emplace();
     parser_->header_limit(static_cast<std::uint32_t>(impl_->cfg.max_header_bytes));
     body_limit_ = impl_->cfg.max_body_bytes;
-    // Beast checks a Content-Length against the limit while it parses the
-    // header, before the route is known: the largest any route takes here,
-    // the route's own in on_header().
-    parser_->body_limit(std::max<std::uint64_t>(body_limit_, impl_->router.max_body_bytes()));
+    // Beast would check a Content-Length against the limit while it parses
+    // the header, before the route is known: on_header() applies the
+    // route's (or this) limit instead, before any body byte is read.
+    parser_->body_limit(boost::none);
     if (buffer_.size() > 0) {  // pipelined: the next request has begun
       read_header();
       return;

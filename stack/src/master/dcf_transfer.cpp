@@ -1,5 +1,6 @@
 #include "canopen/master/dcf_transfer.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <utility>
 
@@ -12,6 +13,12 @@ namespace {
 std::string hex4(std::uint32_t v) {
   char buf[8];
   std::snprintf(buf, sizeof buf, "%04X", v & 0xFFFFU);
+  return buf;
+}
+
+std::string hex32(std::uint32_t v) {
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "0x%08X", v);
   return buf;
 }
 
@@ -109,12 +116,11 @@ std::string write_dcf(const eds::DeviceDescription& eds, std::uint8_t node_id,
   line(out, "LastEDS", base);
   out += "\n[DeviceInfo]\n";
   const eds::DeviceInfo& di = eds.device;
-  auto num = [](std::uint32_t v) { return "0x" + [&] { char b[12]; std::snprintf(b, sizeof b, "%08X", v); return std::string(b); }(); };
   if (!di.vendor_name.empty()) line(out, "VendorName", di.vendor_name);
-  if (di.vendor_number) line(out, "VendorNumber", num(*di.vendor_number));
+  if (di.vendor_number) line(out, "VendorNumber", hex32(*di.vendor_number));
   if (!di.product_name.empty()) line(out, "ProductName", di.product_name);
-  if (di.product_number) line(out, "ProductNumber", num(*di.product_number));
-  if (di.revision_number) line(out, "RevisionNumber", num(*di.revision_number));
+  if (di.product_number) line(out, "ProductNumber", hex32(*di.product_number));
+  if (di.revision_number) line(out, "RevisionNumber", hex32(*di.revision_number));
   if (!di.order_code.empty()) line(out, "OrderCode", di.order_code);
   for (const unsigned kbit : {10U, 20U, 50U, 125U, 250U, 500U, 800U, 1000U}) {
     const bool has = std::find(di.baud_rates_kbit.begin(), di.baud_rates_kbit.end(), kbit) != di.baud_rates_kbit.end();
@@ -138,7 +144,7 @@ std::string write_dcf(const eds::DeviceDescription& eds, std::uint8_t node_id,
     if (c.net_number) line(out, "NetNumber", std::to_string(*c.net_number));
     if (!c.network_name.empty()) line(out, "NetworkName", c.network_name);
     line(out, "CANopenManager", c.canopen_manager ? "1" : "0");
-    if (c.lss_serial_number) line(out, "LSS_SerialNumber", num(*c.lss_serial_number));
+    if (c.lss_serial_number) line(out, "LSS_SerialNumber", hex32(*c.lss_serial_number));
   }
   out += "\n";
   if (!eds.dummy_usage.empty()) {

@@ -875,6 +875,14 @@ TEST(Config, LoadConfigReadsTheFile) {
   }
 }
 
+// Contract "Remote configuration and maintenance": the program download
+// route's own body limit (other bodies keep 1 MiB).
+TEST(Config, MaxProgramBytes) {
+  EXPECT_EQ(parse_config("gateway: {id: a}\n", "gw.yaml").http.max_program_bytes, 16u * 1024 * 1024);
+  EXPECT_EQ(parse_config("http: {max-program-bytes: 65536}\n", "gw.yaml").http.max_program_bytes, 65536u);
+  EXPECT_THAT(config_error("http: {max-program-bytes: 12}\n"), HasSubstr("max-program-bytes"));
+}
+
 TEST(Config, ExampleFileInDeployIsValid) {
   const Config c = load_config(std::string(CANOPEN_SOURCE_DIR) + "/deploy/gateway.example.yaml");
   EXPECT_FALSE(c.networks.empty());

@@ -13,6 +13,7 @@
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/socketcan/service_driver.hpp"
 #include "sim/asio_memory_bus.hpp"
+#include "sim/device_objects.hpp"
 
 namespace canopen::sim {
 namespace {
@@ -240,6 +241,76 @@ TEST(Simulator, ConfiguredDeviceTakesLssNodeIdAtResetCommunication_Cia305) {
   ASSERT_TRUE(run_until(b.io, [&] { return b.sim.device(7) != nullptr && booted(b).size() == 2; }));
   EXPECT_EQ(booted(b), (std::vector<std::uint8_t>{kDrive, 7})) << "no second boot-up as node 5";
   EXPECT_EQ(b.sim.device(kDrive), nullptr);
+  b.sim.stop();
+}
+
+// One SDO transfer through the gateway's client, run until it completes.
+sdo::TransferResult transfer(Bench& b, std::uint8_t node, std::uint16_t index, std::uint8_t sub,
+                             std::optional<Bytes> data) {
+  std::optional<sdo::TransferResult> got;
+  sdo::Request rq;
+  rq.node = node;
+  rq.index = index;
+  rq.sub = sub;
+  rq.on_done = [&](sdo::TransferResult&& r) { got.emplace(std::move(r)); };
+  const auto id = data ? b.net.sdo().download(std::move(rq), *data, SteadyClock::now())
+                       : b.net.sdo().upload(std::move(rq), SteadyClock::now());
+  EXPECT_TRUE(id.ok());
+  EXPECT_TRUE(run_until(b.io, [&] { return got.has_value(); }));
+  return got.value_or(sdo::TransferResult{});
+}
+
+Bytes le32(std::uint32_t v) { return encode(Value::of_unsigned(DataType::Unsigned32, v)); }
+
+// CiA 301 7.5.2.13/14 on a simulated device: "save" keeps a changed value
+// across reset node; "load" brings the EDS default back at the next reset;
+// another value is refused with 08000020h; reading 1010h sub 1 says "on command".
+TEST(Simulator, StoreAndRestore_1010hSave1011hLoad_ValuesAcrossResetNode) {
+  SimulatorOptions opt;
+  opt.tpdo_period = 0ms;
+  Bench b(opt);
+  b.sim.add_node(kIo, source_path("deploy/eds/cia401-io-module.eds"));
+  b.sim.start();
+  ASSERT_TRUE(run_until(b.io, [&] { return booted(b).size() == 1; }));
+  const auto eds_default = b.sim.device(kIo)->dictionary().get_unsigned(0x2002, 0);
+  auto filter_time = [&] {
+    const auto r = transfer(b, kIo, 0x2002, 0, std::nullopt);
+    return r.ok() ? decode(DataType::Unsigned16, r.data).value() : Value{};
+  };
+  auto reset = [&](std::size_t boots) {
+    b.net.send_nmt(NmtCommand::ResetNode, kIo);
+    ASSERT_TRUE(run_until(b.io, [&] { return booted(b).size() == boots; }));
+  };
+  EXPECT_EQ(transfer(b, kIo, 0x1010, 1, std::nullopt).data, le32(1)) << "stores on command";
+  ASSERT_TRUE(transfer(b, kIo, 0x2002, 0, Bytes{99, 0}).ok());
+  EXPECT_EQ(transfer(b, kIo, 0x1010, 1, le32(0x12345678)).error, SdoAbort::CannotStore);
+  ASSERT_TRUE(transfer(b, kIo, 0x1010, 1, le32(0x65766173)).ok());  // "save"
+  reset(2);
+  EXPECT_EQ(filter_time(), Value::of_unsigned(DataType::Unsigned16, 99)) << "kept across reset node";
+  ASSERT_TRUE(transfer(b, kIo, 0x1011, 1, le32(0x64616F6C)).ok());  // "load"
+  EXPECT_EQ(filter_time(), Value::of_unsigned(DataType::Unsigned16, 99)) << "7.5.2.14: at the next reset";
+  reset(3);
+  EXPECT_EQ(filter_time(), Value::of_unsigned(DataType::Unsigned16, eds_default.value_or(0))) << "the EDS default";
+  b.sim.stop();
+}
+
+// CiA 302-3 on a simulated device: a program downloaded to 1F50h and
+// started survives reset node; 1F56h identifies it.
+TEST(Simulator, ProgramDownloadObjects_ImageKeptAcrossResetNode) {
+  SimulatorOptions opt;
+  opt.tpdo_period = 0ms;
+  Bench b(opt);
+  b.sim.add_node(kIo, source_path("deploy/eds/cia401-io-module.eds"));
+  b.sim.start();
+  ASSERT_TRUE(run_until(b.io, [&] { return booted(b).size() == 1; }));
+  const Bytes image{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+  ASSERT_TRUE(transfer(b, kIo, 0x1F51, 1, Bytes{3}).ok());  // clear
+  ASSERT_TRUE(transfer(b, kIo, 0x1F50, 1, image).ok());
+  ASSERT_TRUE(transfer(b, kIo, 0x1F51, 1, Bytes{1}).ok());  // start
+  b.net.send_nmt(NmtCommand::ResetNode, kIo);
+  ASSERT_TRUE(run_until(b.io, [&] { return booted(b).size() == 2; }));
+  EXPECT_EQ(transfer(b, kIo, 0x1F56, 1, std::nullopt).data, le32(program_identification(image)));
+  EXPECT_EQ(transfer(b, kIo, 0x1F51, 1, std::nullopt).data, Bytes{1}) << "still running";
   b.sim.stop();
 }
 

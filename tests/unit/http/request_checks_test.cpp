@@ -98,6 +98,11 @@ TEST(BodyType, OnlyTheApiMediaTypes) {
   EXPECT_FALSE(acceptable_body_type("multipart/form-data; boundary=x", true));
   EXPECT_FALSE(acceptable_body_type("text/plain", false));
   EXPECT_FALSE(acceptable_body_type(std::nullopt, true));
+  // A route's own extra types (an upload route: application/octet-stream).
+  const std::vector<std::string> upload = {"application/octet-stream"};
+  EXPECT_TRUE(acceptable_body_type("Application/Octet-Stream", true, upload));
+  EXPECT_FALSE(acceptable_body_type("application/octet-stream", true));
+  EXPECT_FALSE(acceptable_body_type("text/plain", true, upload));
   EXPECT_FALSE(acceptable_body_type("application/jsonx", true));
 
   EXPECT_TRUE(is_state_changing("POST"));

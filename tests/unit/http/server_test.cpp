@@ -423,6 +423,57 @@ TEST(HttpServer, BodyOverLimitIs413) {
   }
 }
 
+// An upload route (a DCF, a program image) takes its own body limit and
+// media type; every other route keeps the server's.
+TEST(HttpServer, RouteOptionsGiveOneRouteItsOwnBodyLimitAndMediaType) {
+  HttpConfig cfg = quick_config();
+  cfg.max_body_bytes = 1024;
+  gateway::http::RouteOptions upload;
+  upload.max_body_bytes = 4096;
+  upload.body_types = {"application/octet-stream"};
+  TestServer ts(cfg, [&](HttpServer& s) {
+    s.add_route("POST", "/x", echo);
+    s.add_route("PUT", "/upload", echo, upload);
+  });
+  auto send = [&](bhttp::verb v, const char* target, std::size_t n, const char* type) {
+    HttpClient c(ts.port());
+    return c.request(v, target, std::string(n, 'a'), {{"Content-Type", type}});
+  };
+  EXPECT_EQ(send(bhttp::verb::put, "/upload", 4096, "application/octet-stream").result_int(), 200u);
+  auto big = send(bhttp::verb::put, "/upload", 4097, "application/octet-stream");
+  EXPECT_EQ(big.result_int(), 413u);
+  EXPECT_THAT(big.body(), ::testing::HasSubstr("4096 bytes"));
+  EXPECT_EQ(send(bhttp::verb::post, "/x", 2000, "application/json").result_int(), 413u) << "the server's limit";
+  // Media types: the route's extra one there only; text/plain nowhere.
+  auto plain = send(bhttp::verb::put, "/upload", 10, "text/plain");
+  EXPECT_EQ(plain.result_int(), 415u);
+  EXPECT_EQ(plain[bhttp::field::accept], "application/json, application/x-protobuf, application/octet-stream");
+  EXPECT_EQ(send(bhttp::verb::post, "/x", 10, "application/octet-stream").result_int(), 415u);
+}
+
+// A route without handler timeout answers whenever it is done (each step of
+// a program download has its own timeout); the others keep the server's.
+TEST(HttpServer, RouteWithoutHandlerTimeoutAnswersLate) {
+  HttpConfig cfg = quick_config();
+  cfg.handler_timeout = 100ms;
+  gateway::http::RouteOptions unlimited;
+  unlimited.handler_timeout = std::chrono::milliseconds(0);
+  std::promise<Responder> parked;
+  TestServer ts(cfg, [&](HttpServer& s) {
+    s.add_route("GET", "/long", [&](const Request&, Responder done) { parked.set_value(std::move(done)); }, unlimited);
+  });
+  std::thread late([&] {
+    auto done = parked.get_future().get();
+    std::this_thread::sleep_for(400ms);  // past the server's handler_timeout
+    done(Response::json("{\"ok\":true}"));
+  });
+  HttpClient c(ts.port());
+  auto res = c.get("/long");
+  late.join();
+  EXPECT_EQ(res.result_int(), 200u);
+  EXPECT_EQ(res.body(), "{\"ok\":true}");
+}
+
 TEST(HttpServer, HeaderOverLimitIs431AndGarbageIs400) {
   HttpConfig cfg = quick_config();
   cfg.max_header_bytes = 1024;

@@ -152,7 +152,7 @@ class DcfReader {
 struct DcfApplyOptions {
   bool store = false;  // 1010h sub 1 := "save" after the writes
   bool reset = false;  // NMT reset node at the end (see top)
-  std::optional<Duration> timeout;  // SDO timeout per transfer; nullopt: the client's
+  std::optional<Duration> timeout = std::nullopt;  // SDO timeout per transfer; nullopt: the client's
 };
 
 struct DcfApplyReport {

@@ -83,10 +83,10 @@ struct ProgramDownloadOptions {
   bool start = true;         // 1F51h := 1 after it
   // When set, a 1F56h that differs (or is absent) fails at
   // ReadIdentification and the program is not started.
-  std::optional<std::uint32_t> expected_identification;
+  std::optional<std::uint32_t> expected_identification = std::nullopt;
   // SDO timeout of each transfer (the longest wait for the device's next
   // frame; erasing flash on "clear" may take long); nullopt: the client's.
-  std::optional<Duration> timeout;
+  std::optional<Duration> timeout = std::nullopt;
 };
 
 struct ProgramDownloadReport {
