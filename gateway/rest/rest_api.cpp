@@ -944,7 +944,10 @@ void put_program(App& app, const Request& req, Responder respond) {
   const auto node = path_node(req, false, error);
   const auto number = parse_decimal(req.param("n"));
   core::Command command = undecodable(core::Operation::program, 0, error, true);
-  if (node && (!number || *number == 0 || *number > 254)) {
+  if (node && !contains(req.header("content-type"), "application/octet-stream")) {
+    command = undecodable(core::Operation::program, *node,
+                          "the program image must be the body as application/octet-stream", false);
+  } else if (node && (!number || *number == 0 || *number > 254)) {
     command = undecodable(core::Operation::program, *node,
                           "program number must be 1..254 (1F50h sub-index), not '" + std::string(req.param("n")) + "'",
                           true);

@@ -34,6 +34,8 @@ const std::map<Role, std::string> kTokens = {
 struct Expect {
   Role need;
   std::string body;  // a valid body, so an allowed request succeeds
+  std::vector<std::string> headers = {};  // e.g. the body's Content-Type (default JSON)
+  std::string node = "5";                 // the node of the concrete path
 };
 const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
     {{"GET", "/api/v1/gateway"}, {Role::Viewer, ""}},
@@ -58,14 +60,25 @@ const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
                    R"("serialNumber":1426063361},"nodeId":30})"}},
     {{"POST", "/api/v1/networks/{net}/lss/assign-all"}, {Role::Admin, R"({"firstNodeId":40,"timeoutMs":5})"}},
     {{"GET", "/api/v1/networks/{net}/lss/devices"}, {Role::Admin, ""}},
+    // Contract "Remote configuration and maintenance": DCF read viewer,
+    // store/restore operator, DCF apply and program download admin. The
+    // program goes to the I/O module (node 10), which has the CiA 302-3 objects.
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/dcf"}, {Role::Viewer, ""}},
+    {{"POST", "/api/v1/networks/{net}/nodes/{node}/dcf"},
+     {Role::Admin, R"({"dcf":"[1017]\nParameterName=Producer heartbeat time\nObjectType=0x7\nDataType=0x0006\n)"
+                   R"(AccessType=rw\nParameterValue=1000\n"})"}},
+    {{"POST", "/api/v1/networks/{net}/nodes/{node}/store"}, {Role::Operator, ""}},
+    {{"POST", "/api/v1/networks/{net}/nodes/{node}/restore"}, {Role::Operator, ""}},
+    {{"PUT", "/api/v1/networks/{net}/nodes/{node}/program/{n}"},
+     {Role::Admin, "program image", {"Content-Type: application/octet-stream"}, "10"}},
     {{"GET", "/api/v1/openapi.json"}, {Role::None, ""}},
     {{"GET", "/metrics"}, {Role::Viewer, ""}},
 };
 
 // Pattern -> a concrete path on the demo network (node 5, heartbeat 1017h).
-std::string concrete(std::string pattern) {
+std::string concrete(std::string pattern, const std::string& node = "5") {
   const std::pair<const char*, const char*> subst[] = {
-      {"{net}", "1"}, {"{node}", "5"}, {"{index}", "1017"}, {"{sub}", "0"}, {"{n}", "1"}};
+      {"{net}", "1"}, {"{node}", node.c_str()}, {"{index}", "1017"}, {"{sub}", "0"}, {"{n}", "1"}};
   for (auto [from, to] : subst)
     if (auto p = pattern.find(from); p != std::string::npos) pattern.replace(p, std::string(from).size(), to);
   return pattern;
@@ -146,12 +159,12 @@ TEST(SecurityMatrix, EveryRouteByRole) {
       ASSERT_NE(it, kMatrix.end()) << method << " " << pattern << " has no expected role in this test";
       e = it->second;
     }
-    const std::string path = concrete(pattern);
+    const std::string path = concrete(pattern, e.node);
     for (const auto& caller : callers) {
       SCOPED_TRACE(method + " " + path + " as " + who(caller));
       const bool allowed = e.need == Role::None || (caller && allows(*caller, e.need));
       HttpReply r = pattern == "/api/v1/events" ? rig.as(caller, method, path, {}, kUpgrade)
-                                                : rig.as(caller, method, path, e.body);
+                                                : rig.as(caller, method, path, e.body, e.headers);
       if (allowed) {
         if (pattern == "/api/v1/events")
           EXPECT_EQ(r.status, 101) << r.body;
