@@ -30,6 +30,7 @@ const state = {
   wsOpen: false,
   wsRetry: 0,
   authBlocked: false,     // a 401 happened: wait for a token instead of retrying
+  denied: {},             // role -> true once the gateway answered 403 to a request needing it
   dirty: { nodes: false, values: false, emcy: false, valueLayout: false },
 };
 
@@ -161,14 +162,18 @@ class ApiError extends Error {
   }
 }
 
-async function api(method, path, body, retried = false) {
-  const headers = { Accept: 'application/json' };
+// body: a JSON value, or with opts.contentType a file's content (string,
+// ArrayBuffer) sent as it is. opts.accept: the Accept header; opts.text: answer
+// {text, contentType, data} (data: the JSON, if the answer is JSON) instead of the JSON.
+async function api(method, path, body, opts = {}, retried = false) {
+  const headers = { Accept: opts.accept || 'application/json' };
   if (state.token) headers.Authorization = `Bearer ${state.token}`;
-  if (body !== undefined) headers['Content-Type'] = 'application/json';
+  const raw = opts.contentType !== undefined;
+  if (body !== undefined) headers['Content-Type'] = raw ? opts.contentType : 'application/json';
   let res;
   try {
     res = await fetch(`/api/v1${path}`, {
-      method, headers, cache: 'no-store', body: body === undefined ? undefined : JSON.stringify(body),
+      method, headers, cache: 'no-store', body: body === undefined ? undefined : raw ? body : JSON.stringify(body),
     });
   } catch (e) {
     throw new ApiError(0, `gateway unreachable (${e.message})`);
@@ -179,13 +184,14 @@ async function api(method, path, body, retried = false) {
   // The gateway rate-limits per client; a read can simply wait its turn once.
   if (res.status === 429 && method === 'GET' && !retried) {
     await sleep(1000 * Math.min(5, Number(res.headers.get('Retry-After')) || 1));
-    return api(method, path, body, true);
+    return api(method, path, body, opts, true);
   }
   if (!res.ok) {
     const detail = (data && (data.detail || data.title)) || res.statusText || `HTTP ${res.status}`;
     if (res.status === 401) needToken(detail);
     throw new ApiError(res.status, detail, data && data.abortCode);
   }
+  if (opts.text) return { text, contentType: res.headers.get('Content-Type') || '', data };
   return data;
 }
 
@@ -432,7 +438,8 @@ function restart() {
   state.emcy = [];
   emcySeen.clear();
   state.od.clear();
-  if (state.selected !== null) renderOd(state.selected);
+  state.denied = {};
+  if (state.selected !== null) { renderOd(state.selected); renderConfig(state.selected); }
   loadAll();
 }
 
@@ -523,6 +530,7 @@ function onEvent(msg) {
       break;
     }
     case 'bus': setBus(ev.state, ev); break;
+    case 'transfer': onTransfer(ev); break;
     case 'boot':
       if (ev.step === 'failed') toast(`Node ${ev.node} boot-up failed: ${ev.error || ev.detail}`, 'error');
       break;
@@ -733,6 +741,7 @@ function selectNode(id) {
   destroyCharts();
   state.dirty.nodes = state.dirty.values = state.dirty.valueLayout = state.dirty.emcy = true;
   renderOd(id);
+  renderConfig(id);
 }
 
 function ownIdentityText() {
@@ -1086,7 +1095,7 @@ async function loadLss() {
     const r = await api('GET', `/networks/${state.net}/lss/devices`);
     renderLss(r.devices || []);
   } catch (e) {
-    if (e.status === 403) lssStatus('Needs an admin token.', 'error');
+    if (e.status === 403) { lssStatus('Needs an admin token.', 'error'); noteDenied('admin'); }
   }
 }
 
@@ -1143,9 +1152,508 @@ function lssAssignAll() {
   });
 }
 
+// ---------------------------------------------------------------- configuration and maintenance
+// Contract "Remote configuration and maintenance": per node its settings
+// (GET/PUT config), its EDS (PUT eds), a DCF backup (GET dcf) and restore
+// (POST dcf, with a diff against the EDS defaults first), store/restore
+// (1010h/1011h) and a CiA 302-3 program download. Long ones report progress
+// as `transfer` events (onTransfer). One operation at a time from this page.
+
+const cfg = {
+  settings: null,          // the node's settings as GET config answered them
+  bootTouched: new Set(),  // boot keys whose checkbox was changed since the last load
+  busy: null,              // the running operation's name, or null
+  dcf: null,               // {name, text, rows} of the chosen DCF file
+};
+
+// What the gateway refused this token (a 403): those buttons are disabled
+// until the token changes. The page has no other way to know its role.
+function noteDenied(role) {
+  state.denied[role] = true;
+  if (role === 'operator') state.denied.admin = true;
+  updateConfigButtons();
+}
+
+// Files (EDS, DCF, program images) go as they are: text/plain would be a
+// "simple" cross-site request, which the gateway refuses (415).
+const FILE_TYPE = 'application/octet-stream';
+
+const nodePath = (id, rest) => `/networks/${state.net}/nodes/${id}/${rest}`;
+
+function cfgStatus(sel, text, kind = 'info') {
+  const s = $(sel);
+  setText(s, text);
+  s.dataset.kind = kind;
+}
+
+function fileOf(sel) {
+  const f = $(sel).files;
+  return f && f.length ? f[0] : null;
+}
+
+function updateConfigButtons() {
+  const needs = { '#eds-upload': '#eds-file', '#prog-start': '#prog-file' };
+  for (const b of document.querySelectorAll('#panel-config [data-role]')) {
+    const role = b.dataset.role;
+    const denied = !!state.denied[role];
+    const missing = needs[`#${b.id}`] ? !fileOf(needs[`#${b.id}`]) : b.id === 'dcf-apply' ? !cfg.dcf : false;
+    b.disabled = denied || missing || cfg.busy !== null;
+    b.title = denied ? `Needs a token with the ${role} role` : '';
+  }
+  $('#dcf-read').disabled = cfg.busy !== null;
+}
+
+// Runs one operation for node `id`; its result goes to `statusSel`, or to
+// a toast when another node was selected meanwhile.
+async function cfgRun(name, id, statusSel, fn) {
+  if (cfg.busy) { cfgStatus(statusSel, `Wait: ${cfg.busy} is running.`, 'error'); return; }
+  cfg.busy = name;
+  updateConfigButtons();
+  cfgStatus(statusSel, `${name}…`);
+  try {
+    const text = await fn();
+    if (state.selected === id) cfgStatus(statusSel, text, 'ok');
+    else toast(`Node ${id}: ${text}`, 'ok');
+  } catch (e) {
+    const text = cfgErrorText(e);
+    if (e.status === 403 && e.role) noteDenied(e.role);
+    if (state.selected === id) cfgStatus(statusSel, text, 'error');
+    toast(`Node ${id}: ${text}`, 'error');
+  } finally {
+    cfg.busy = null;
+    updateConfigButtons();
+  }
+}
+
+function cfgErrorText(err) {
+  if (!(err instanceof ApiError)) return describeError(err);
+  switch (err.status) {
+    case 400: return `Refused: ${err.detail}`;
+    case 404: return `Not found: ${err.detail}`;
+    case 409: return `Busy: ${err.detail}`;
+    case 413: return `Too large: ${err.detail}`;
+    default: return describeError(err);
+  }
+}
+
+// A request that needs `role`: a 403 says this token does not have it.
+async function roleApi(role, ...args) {
+  try {
+    return await api(...args);
+  } catch (e) {
+    if (e instanceof ApiError && e.status === 403) e.role = role;
+    throw e;
+  }
+}
+
+const SOURCE_TEXT = {
+  'state-dir': 'changed at run time, kept in the state directory',
+  config: 'from the configuration file',
+  none: 'not configured: defaults',
+};
+
+function renderConfig(id) {
+  const own = state.nodes.get(id)?.own || id === state.ownId;
+  setText($('#config-node'), `node ${id}`);
+  $('#panel-config').dataset.node = id;
+  $('#config-detail').hidden = own;
+  $('#config-empty').hidden = !own;
+  if (own) {
+    setText($('#config-empty'), 'The gateway\'s own node is set up in the gateway\'s configuration file, not here.');
+    return;
+  }
+  for (const sel of ['#eds-file', '#dcf-file', '#prog-file']) $(sel).value = '';
+  for (const sel of ['#cfg-status', '#eds-status', '#store-status', '#dcf-status', '#prog-status', '#dcf-text', '#prog-text'])
+    cfgStatus(sel, '');
+  for (const sel of ['#dcf-bar', '#prog-bar', '#dcf-diff-head', '#dcf-diff-wrap', '#dcf-results-wrap']) $(sel).hidden = true;
+  cfg.dcf = null;
+  updateConfigButtons();
+  loadConfig(id);
+}
+
+async function loadConfig(id) {
+  cfgStatus('#cfg-status', 'loading…');
+  let r;
+  try {
+    r = await api('GET', nodePath(id, 'config'));
+  } catch (e) {
+    if (state.selected === id) cfgStatus('#cfg-status', cfgErrorText(e), 'error');
+    return;
+  }
+  if (state.selected !== id) return;
+  cfgStatus('#cfg-status', '');
+  const settings = r.settings && typeof r.settings === 'object' ? r.settings : {};
+  cfg.settings = settings;
+  cfg.bootTouched = new Set();
+  $('#cfg-source').dataset.source = r.source || '';
+  setText($('#cfg-source'), r.source ? `(${SOURCE_TEXT[r.source] || r.source})` : '');
+  $('#cfg-source').title = r.file ? `kept in ${r.file}` : '';
+  $('#cfg-revert').hidden = r.source !== 'state-dir';
+  $('#cfg-name').value = settings.name ?? '';
+  setText($('#cfg-file'), settings.dcf ?? settings.eds ?? 'none (values arrive raw)');
+  const hb = settings['heartbeat-consumer-ms'];
+  $('#cfg-hb').value = hb === undefined || hb === null ? '' : String(hb);
+  const g = settings.guarding || {};
+  $('#cfg-guard').value = g['guard-time-ms'] ?? '';
+  $('#cfg-life').value = g['life-time-factor'] ?? '';
+  for (const c of document.querySelectorAll('#cfg-form [data-boot]')) c.checked = !!(settings.boot && settings.boot[c.dataset.boot]);
+  $('#cfg-metrics').value = (settings['sparkplug-metrics'] || []).join(', ');
+}
+
+// The form as the YAML keys of the node's entry. Keys the form does not
+// show (the node's file) go back as they came; empty fields are left out
+// (the gateway's default). Values go as typed: the gateway checks them.
+function settingsFromForm() {
+  const s = { ...(cfg.settings || {}) };
+  const put = (k, v) => { if (v === undefined || v === '') delete s[k]; else s[k] = v; };
+  put('name', $('#cfg-name').value.trim());
+  const hb = $('#cfg-hb').value.trim();
+  put('heartbeat-consumer-ms', /^\d+$/.test(hb) ? Number(hb) : hb);
+  const guard = $('#cfg-guard').value.trim(), life = $('#cfg-life').value.trim();
+  if (guard === '' && life === '') delete s.guarding;
+  else s.guarding = { 'guard-time-ms': guard === '' ? 0 : Number(guard), 'life-time-factor': life === '' ? 0 : Number(life) };
+  // Only the boot keys the node had or the user changed: an absent key
+  // keeps its default (read-pdo-config has no plain false one).
+  const boot = { ...(s.boot || {}) };
+  for (const c of document.querySelectorAll('#cfg-form [data-boot]')) {
+    if (c.dataset.boot in boot || cfg.bootTouched.has(c.dataset.boot)) boot[c.dataset.boot] = c.checked;
+  }
+  if (Object.keys(boot).length) s.boot = boot;
+  const metrics = $('#cfg-metrics').value.split(/[\s,]+/).filter(Boolean);
+  put('sparkplug-metrics', metrics.length ? metrics : undefined);
+  return s;
+}
+
+function saveConfig() {
+  const id = state.selected;
+  const settings = settingsFromForm();
+  return cfgRun('Saving', id, '#cfg-status', async () => {
+    await roleApi('admin', 'PUT', nodePath(id, 'config'), settings);
+    forgetNode(id);
+    await loadConfig(id);
+    return 'Saved: in use now and kept across restarts.';
+  });
+}
+
+// DELETE config: state-dir's settings and file go, the configuration file's apply again.
+async function revertConfig() {
+  const id = state.selected;
+  if (!await confirmDialog(`Revert node ${id} to the configuration file?`,
+    'The settings changed at run time and an uploaded EDS/DCF are dropped; the configuration file\'s settings ' +
+    'for this node apply again at once (a node only configured at run time is no longer configured).', 'Revert')) return;
+  return cfgRun('Reverting', id, '#cfg-status', async () => {
+    await roleApi('admin', 'DELETE', nodePath(id, 'config'));
+    forgetNode(id);
+    await loadConfig(id);
+    return 'Reverted: the configuration file\'s settings apply.';
+  });
+}
+
+// The node's file or name changed: its dictionary and row are loaded again.
+function forgetNode(id) {
+  state.od.delete(id);
+  if (state.selected === id) renderOd(id);
+  loadNodes().catch(() => {});
+}
+
+function uploadEds() {
+  const id = state.selected;
+  const file = fileOf('#eds-file');
+  if (!file) return;
+  return cfgRun(`Uploading ${file.name}`, id, '#eds-status', async () => {
+    const text = await file.text();
+    const r = await roleApi('admin', 'PUT', `${nodePath(id, 'eds')}?name=${encodeURIComponent(file.name)}`, text,
+                            { contentType: FILE_TYPE });
+    $('#eds-file').value = '';
+    forgetNode(id);
+    await loadConfig(id);
+    const warnings = (r && r.warnings) || [];
+    return `${file.name} accepted and in use (object dictionary reloaded).` +
+      (warnings.length ? `\nWarnings:\n${warnings.map((w) => (typeof w === 'string' ? w : w.message || JSON.stringify(w))).join('\n')}` : '');
+  });
+}
+
+// ---- DCF
+
+function setProgress(bar, label, done, total, unit) {
+  bar.hidden = false;
+  if (total > 0) {
+    bar.max = total;
+    bar.value = Math.min(done, total);
+    const pct = Math.floor((100 * Math.min(done, total)) / total);
+    setText(label, `${done.toLocaleString('en')} / ${total.toLocaleString('en')} ${unit || ''} (${pct} %)`);
+  } else {
+    bar.removeAttribute('value'); // indeterminate until the first progress
+    setText(label, '');
+  }
+}
+
+function downloadFile(name, text) {
+  const url = URL.createObjectURL(new Blob([text], { type: 'text/plain' }));
+  const a = el('a', { href: url, download: name, hidden: true });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 10_000);
+}
+
+const objText = (index, sub) => `${hex(index, 4)}h sub ${sub}`;
+
+function failedText(list) {
+  return list.map((f) => `${objText(f.index, f.subIndex ?? f.sub ?? 0)}: ${f.error || f.detail || 'failed'}` +
+                         `${f.abortCode ? ` (${f.abortCode})` : ''}`).join('; ');
+}
+
+function readDcf() {
+  const id = state.selected;
+  setProgress($('#dcf-bar'), $('#dcf-text'), 0, 0);
+  return cfgRun('Reading the DCF', id, '#dcf-status', async () => {
+    const r = await api('GET', nodePath(id, 'dcf'), undefined, { accept: 'application/json, text/plain;q=0.5', text: true });
+    const doc = r.data && typeof r.data === 'object' ? r.data : null;
+    const text = doc ? doc.text ?? doc.dcf ?? '' : r.text;
+    const name = `node${id}.dcf`;
+    downloadFile(name, text);
+    const failed = (doc && (doc.failed || doc.failures)) || [];
+    const bar = $('#dcf-bar');
+    if (bar.max > 1) bar.value = bar.max;
+    return `${name} saved${doc && doc.objects !== undefined ? `: ${doc.objects} objects read` : ''}` +
+      (failed.length ? `; not readable: ${failedText(failed)}` : '');
+  });
+}
+
+// A DCF (CiA 306 INI text) as its values: one row per object/sub-object
+// with a ParameterValue. Section names carry the sub-index in hex.
+function parseDcf(text) {
+  const sections = new Map();
+  let cur = null;
+  for (const line0 of text.split(/\r?\n/)) {
+    const line = line0.trim();
+    if (!line || line.startsWith(';')) continue;
+    const m = /^\[([^\]]+)\]$/.exec(line);
+    if (m) { cur = {}; sections.set(m[1].trim().toLowerCase(), cur); continue; }
+    const eq = line.indexOf('=');
+    if (cur && eq > 0) cur[line.slice(0, eq).trim().toLowerCase()] = line.slice(eq + 1).trim();
+  }
+  const rows = [];
+  for (const [name, keys] of sections) {
+    const m = /^([0-9a-f]{4})(?:sub([0-9a-f]{1,2}))?$/.exec(name);
+    if (!m || keys.parametervalue === undefined) continue;
+    rows.push({ index: parseInt(m[1], 16), sub: m[2] ? parseInt(m[2], 16) : 0,
+                name: keys.parametername || '', value: keys.parametervalue });
+  }
+  return rows.sort((a, b) => a.index - b.index || a.sub - b.sub);
+}
+
+// A CiA 306 integer: decimal, 0x hex, leading-0 octal, with $NODEID terms.
+function dcfInteger(text, node) {
+  let sum = 0n;
+  for (const term of text.replace(/\$NODEID/gi, String(node)).split('+')) {
+    const t = term.trim();
+    if (/^-?0x[0-9a-f]+$/i.test(t)) sum += t.startsWith('-') ? -BigInt(t.slice(1)) : BigInt(t);
+    else if (/^0[0-7]+$/.test(t)) sum += BigInt('0o' + t.slice(1));
+    else if (/^-?\d+$/.test(t)) sum += BigInt(t);
+    else return null;
+  }
+  return sum;
+}
+
+// Both values in one form, so equal values look equal and compare equal.
+function dcfCompare(sub, dcfText, node) {
+  const type = sub && sub.type;
+  const def = sub ? sub.default : undefined;
+  if (type && (INT_TYPES.has(type) || type === 'b')) {
+    const v = dcfInteger(dcfText, node);
+    let d = null;
+    try { d = def === null || def === undefined ? null : BigInt(typeof def === 'boolean' ? Number(def) : def); } catch { d = null; }
+    const show = (x) => (x === null ? '–' : type === 'b' ? String(x !== 0n) : fmtValue(x.toString(), type));
+    return { dcf: v === null ? dcfText : show(v), eds: show(d), same: v !== null && d !== null && v === d };
+  }
+  if (type === 'r32' || type === 'r64') {
+    const v = Number(dcfText), d = Number(def);
+    return { dcf: dcfText, eds: def ?? '–', same: Number.isFinite(v) && v === d };
+  }
+  const norm = (x) => String(x ?? '').replace(/^0x/i, '').replace(/\s+/g, '').toLowerCase();
+  const bytes = type === 'os' || type === 'd';
+  return { dcf: dcfText, eds: def ?? '–', same: def !== undefined && def !== null &&
+           (bytes ? norm(dcfText) === norm(def) : dcfText === String(def)) };
+}
+
+async function odOf(id) {
+  let od = state.od.get(id);
+  if (!od) {
+    od = await api('GET', nodePath(id, 'od'));
+    state.od.set(id, od);
+  }
+  return od;
+}
+
+function odEntry(od, index, sub) {
+  const o = od && od.objects.find((x) => x.index === index);
+  const s = o && o.subs.find((x) => x.subIndex === sub);
+  return { obj: o, sub: s, name: o ? (s && s.name && s.name !== o.name ? `${o.name} / ${s.name}` : o.name) : '' };
+}
+
+async function chooseDcf() {
+  const id = state.selected;
+  const file = fileOf('#dcf-file');
+  cfg.dcf = null;
+  $('#dcf-diff-head').hidden = $('#dcf-diff-wrap').hidden = $('#dcf-results-wrap').hidden = true;
+  cfgStatus('#dcf-status', '');
+  updateConfigButtons();
+  if (!file) return;
+  const text = await file.text();
+  const rows = parseDcf(text);
+  if (!rows.length) {
+    cfgStatus('#dcf-status', `${file.name}: no ParameterValue entries: not a DCF of configured values.`, 'error');
+    return;
+  }
+  let od = null;
+  try { od = await odOf(id); } catch (e) {
+    cfgStatus('#dcf-status', `No EDS defaults to compare with (${cfgErrorText(e)}).`);
+  }
+  if (state.selected !== id) return;
+  const diff = rows.map((r) => {
+    const e = odEntry(od, r.index, r.sub);
+    const c = dcfCompare(e.sub, r.value, id);
+    return { ...r, name: e.name || r.name, eds: e.sub ? c.eds : 'not in the EDS', dcfShown: c.dcf, same: !!e.sub && c.same };
+  });
+  cfg.dcf = { name: file.name, text, rows: diff };
+  renderDcfDiff();
+  updateConfigButtons();
+}
+
+function renderDcfDiff() {
+  const d = cfg.dcf;
+  if (!d) return;
+  const changed = d.rows.filter((r) => !r.same);
+  const all = $('#dcf-diff-all').checked;
+  setText($('#dcf-diff-summary'), `${d.name}: ${d.rows.length} values, ${changed.length} differ from the EDS defaults. `);
+  $('#dcf-diff-head').hidden = false;
+  $('#dcf-diff-wrap').hidden = false;
+  const list = all ? d.rows : changed;
+  $('#dcf-diff-body').replaceChildren(...(list.length ? list.map((r) => el('tr',
+    { 'data-obj': keyOf(r.index, r.sub), 'data-diff': r.same ? '0' : '1' },
+    el('td', { text: objText(r.index, r.sub) }),
+    el('td', { text: r.name }),
+    el('td', { class: 'mono', text: String(r.eds) }),
+    el('td', { class: 'mono', text: String(r.dcfShown) })))
+    : [el('tr', { class: 'empty' }, el('td', { colspan: 4, text: 'every value equals the EDS default' }))]));
+}
+
+async function applyDcf() {
+  const id = state.selected;
+  const d = cfg.dcf;
+  if (!d) return;
+  const store = $('#dcf-store').checked, reset = $('#dcf-reset').checked;
+  if (reset && !await confirmDialog(`Apply ${d.name} and reset node ${id}?`,
+    'The values are written, then the node restarts its application and boots again into pre-operational ' +
+    '(no process data until started).', 'Apply and reset')) return;
+  setProgress($('#dcf-bar'), $('#dcf-text'), 0, 0);
+  $('#dcf-results-wrap').hidden = true;
+  return cfgRun(`Applying ${d.name}`, id, '#dcf-status', async () => {
+    const q = [store ? 'store=true' : null, reset ? 'reset=true' : null].filter(Boolean).join('&');
+    const r = await roleApi('admin', 'POST', `${nodePath(id, 'dcf')}${q ? '?' + q : ''}`, d.text,
+                            { contentType: FILE_TYPE });
+    const objects = (r && (r.objects || r.results)) || [];
+    let od = null;
+    try { od = await odOf(id); } catch { od = null; }
+    const failed = objects.filter((o) => objectFailed(o));
+    if (state.selected === id) {
+      $('#dcf-results-body').replaceChildren(...objects.map((o) => {
+        const sub = o.subIndex ?? o.sub ?? 0;
+        const bad = objectFailed(o);
+        return el('tr', { 'data-obj': keyOf(o.index, sub), 'data-result': bad ? 'failed' : 'ok' },
+          el('td', { text: objText(o.index, sub) }),
+          el('td', { text: odEntry(od, o.index, sub).name }),
+          el('td', { text: bad ? `${o.error || o.detail || 'failed'}${o.abortCode ? ` (${o.abortCode})` : ''}` : 'written' }));
+      }));
+      $('#dcf-results-wrap').hidden = false;
+      const bar = $('#dcf-bar');
+      if (bar.max > 1) bar.value = bar.max;
+    }
+    const storeError = r && r.storeError ? `; store failed: ${r.storeError.error || 'failed'}` +
+      `${r.storeError.abortCode ? ` (${r.storeError.abortCode})` : ''}` : '';
+    const extra = [r && r.stored ? 'stored' : null, r && r.reset ? 'node reset' : null].filter(Boolean).join(', ');
+    const text = `${objects.length - failed.length} of ${objects.length} objects written${extra ? ', ' + extra : ''}`;
+    if (failed.length || storeError) throw new Error(`${text}${failed.length ? `; ${failed.length} failed (highlighted below)` : ''}${storeError}`);
+    return text + '.';
+  });
+}
+
+const objectFailed = (o) => !!(o.error || o.abortCode) || o.ok === false || o.status === 'failed';
+
+// ---- store / restore
+
+async function storeNode(restore) {
+  const id = state.selected;
+  if (restore && !await confirmDialog(`Restore the defaults of node ${id}?`,
+    'The device loads its default parameters (1011h sub 1 "load") and is reset: it restarts its application ' +
+    'and boots into pre-operational (no process data until started). Stored settings are lost.', 'Restore and reset')) return;
+  return cfgRun(restore ? 'Restoring' : 'Storing', id, '#store-status', async () => {
+    await roleApi('operator', 'POST', nodePath(id, restore ? 'restore' : 'store'));
+    return restore ? 'Defaults restored; the node was reset.' : 'Parameters stored in the device (1010h).';
+  });
+}
+
+// ---- program download (CiA 302-3)
+
+async function downloadProgram() {
+  const id = state.selected;
+  const file = fileOf('#prog-file');
+  const n = Number($('#prog-n').value);
+  if (!file) return;
+  if (!Number.isInteger(n) || n < 1 || n > 254) { cfgStatus('#prog-status', 'Program number must be 1..254.', 'error'); return; }
+  if (!await confirmDialog(`Download ${file.name} to node ${id}?`,
+    `The device stops its program (1F51h), program ${n} is cleared and replaced by ${file.name} ` +
+    `(${file.size.toLocaleString('en')} bytes), then started. The device does not do its job meanwhile.`, 'Download')) return;
+  setProgress($('#prog-bar'), $('#prog-text'), 0, file.size, 'bytes');
+  return cfgRun(`Downloading program ${n}`, id, '#prog-status', async () => {
+    const image = await file.arrayBuffer();
+    const r = await roleApi('admin', 'PUT', nodePath(id, `program/${n}`), image, { contentType: FILE_TYPE });
+    const bytes = Number(r && r.bytes !== undefined ? r.bytes : file.size);
+    if (state.selected === id) setProgress($('#prog-bar'), $('#prog-text'), bytes, bytes, 'bytes');
+    const ident = r && r.identification;
+    return `Program ${n}: ${bytes.toLocaleString('en')} bytes downloaded and started; ` +
+      (ident === undefined || ident === null ? 'the device has no program identification (1F56h).'
+        : `identification ${fmtValue(ident, 'u32')} (1F56h sub ${n}).`);
+  });
+}
+
+// `transfer` events of the selected node move the bars, whoever started the
+// transfer (this page, another client, MQTT).
+function onTransfer(ev) {
+  if (ev.node !== state.selected) return;
+  const program = ev.operation === 'program-download';
+  const bar = $(program ? '#prog-bar' : '#dcf-bar');
+  setProgress(bar, $(program ? '#prog-text' : '#dcf-text'), Number(ev.done) || 0, Number(ev.total) || 0, ev.unit);
+  bar.dataset.status = ev.status;
+  if (ev.status === 'failed') {
+    cfgStatus(program ? '#prog-status' : '#dcf-status',
+      `Failed: ${ev.error || 'transfer failed'}${ev.abortCode ? ` (${ev.abortCode})` : ''}${ev.detail ? ` · ${ev.detail}` : ''}`, 'error');
+  }
+}
+
+function setupConfig() {
+  $('#cfg-form').addEventListener('submit', (e) => { e.preventDefault(); if (state.selected !== null) saveConfig(); });
+  $('#cfg-reload').addEventListener('click', () => { if (state.selected !== null) loadConfig(state.selected); });
+  $('#cfg-revert').addEventListener('click', revertConfig);
+  for (const c of document.querySelectorAll('#cfg-form [data-boot]')) c.addEventListener('change', () => cfg.bootTouched.add(c.dataset.boot));
+  $('#eds-file').addEventListener('change', updateConfigButtons);
+  $('#prog-file').addEventListener('change', updateConfigButtons);
+  $('#eds-upload').addEventListener('click', uploadEds);
+  $('#dcf-read').addEventListener('click', readDcf);
+  $('#dcf-file').addEventListener('change', chooseDcf);
+  $('#dcf-diff-all').addEventListener('change', renderDcfDiff);
+  $('#dcf-apply').addEventListener('click', applyDcf);
+  $('#node-store').addEventListener('click', () => storeNode(false));
+  $('#node-restore').addEventListener('click', () => storeNode(true));
+  $('#prog-start').addEventListener('click', downloadProgram);
+}
+
 // ---------------------------------------------------------------- wiring
 
 function setupEvents() {
+  setupConfig();
   $('#nodes-body').addEventListener('click', (e) => {
     const row = e.target.closest('tr[data-node]');
     if (row) selectNode(Number(row.dataset.node));

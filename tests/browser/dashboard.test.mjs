@@ -544,6 +544,19 @@ async function partToken() {
   const text = await denied.textContent();
   check(/Not permitted/.test(text), `a viewer's NMT stop shows the 403 readably (${text})`);
   check((await nodeState(page, 10)) === 'operational', 'and node 10 stays operational');
+  // Nor configure: the admin buttons of the Configuration panel are disabled
+  // (the gateway refused this token the LSS list), and the operator's Store
+  // shows the gateway's 403 readably, then is disabled too.
+  await page.waitForSelector('#panel-config[data-node="10"] #cfg-save[disabled]');
+  const saveTitle = await page.getAttribute('#cfg-save', 'title');
+  check(/admin/.test(saveTitle), `a viewer cannot save node settings: Save is disabled ("${saveTitle}")`);
+  check(await page.isEnabled('#dcf-read'), 'but may read a DCF back (viewer)');
+  await page.click('#node-store');
+  await page.waitForSelector('#store-status[data-kind="error"]');
+  const storeDenied = await page.textContent('#store-status');
+  check(/Not permitted/.test(storeDenied), `a viewer's Store shows the 403 readably (${storeDenied})`);
+  await page.waitForSelector('#node-store[disabled]');
+  check(true, 'and Store is disabled afterwards');
   // 401s while the token was missing or wrong are expected console noise.
   consoleErrors.splice(errorsBefore);
   await ctx.close();
@@ -621,6 +634,172 @@ async function partSparkplug() {
   }
 }
 
+// ---------------------------------------------------------------- part 4: configuration and maintenance
+
+// Contract "Remote configuration and maintenance", in the node's
+// Configuration panel, on a demo gateway of its own (fresh state-dir):
+// the settings form (a bad value refused readably, a good one saved and kept
+// in state-dir), a DCF read back, changed in one value, compared with the
+// EDS defaults and applied with one result per object, and a CiA 302-3
+// program download whose progress bar moves with the `transfer` events and
+// ends with the device's program identification.
+async function partConfig() {
+  const g = await startGateway('gateway-config',
+    `gateway: { state-dir: "@STATE@" }\nhttp: { web-root: "${WEB_ROOT}" }\n`,
+    ['--demo', '--http', '127.0.0.1:0']);
+  const base = await waitListening(g);
+  const ctx = await launch('config');
+  const page = await ctx.newPage();
+  watchConsole(page, 'config');
+  await page.goto(base + '/#node=10');
+  await page.waitForSelector('body[data-ws="open"]');
+  await page.waitForSelector('#panel-config[data-node="10"] #config-detail:not([hidden])');
+  await page.waitForFunction(() => document.querySelector('#cfg-source').textContent !== '');
+  const source = await page.textContent('#cfg-source');
+  check(/configuration file/.test(source), `node 10's settings are shown, from the configuration file (${source})`);
+
+  // Settings: a bad value is refused with the validator's reason and changes
+  // nothing; a good one is used at once and comes from state-dir from then on.
+  const errorsBefore = consoleErrors.length;
+  const hbConsumer = (await getJson(base, '/networks/1/nodes/10/config')).settings['heartbeat-consumer-ms'];
+  check(await page.inputValue('#cfg-hb') === String(hbConsumer), `the form shows the heartbeat consumer time (${hbConsumer})`);
+  await page.fill('#cfg-hb', 'soon');
+  await page.click('#cfg-save');
+  await page.waitForSelector('#cfg-status[data-kind="error"]');
+  const refused = await page.textContent('#cfg-status');
+  check(/^Refused: .*soon/.test(refused), `a bad heartbeat consumer time is refused readably (${refused})`);
+  const kept = (await getJson(base, '/networks/1/nodes/10/config')).settings['heartbeat-consumer-ms'];
+  check(kept === hbConsumer, `and nothing changed (heartbeat-consumer-ms ${kept})`);
+  const badSaves = consoleErrors.splice(errorsBefore);
+  check(badSaves.every((e) => /status of 400/.test(e)), `only the refused PUT's 400 was logged (${badSaves.length})`);
+  await page.fill('#cfg-hb', String(hbConsumer));
+  await page.fill('#cfg-name', 'conveyor-io');
+  await page.click('#cfg-save');
+  await page.waitForSelector('#cfg-status[data-kind="ok"]');
+  await page.waitForFunction(() => /state directory/.test(document.querySelector('#cfg-source').textContent));
+  await page.waitForFunction(() => document.querySelector('#nodes-body tr[data-node="10"] [data-field=name]')
+    ?.textContent === 'conveyor-io');
+  check(true, `a new name is saved, shown in the node list, and the settings now come from the state directory`);
+
+  // DCF read-back as a file download, with the transfer progress.
+  const [download] = await Promise.all([page.waitForEvent('download', { timeout: 30_000 }), page.click('#dcf-read')]);
+  check(download.suggestedFilename() === 'node10.dcf', `Download DCF saves node10.dcf (${download.suggestedFilename()})`);
+  const dcf = fs.readFileSync(await download.path(), 'utf8');
+  await page.waitForSelector('#dcf-status[data-kind="ok"]');
+  check(/\[1017\][^[]*ParameterValue=/i.test(dcf), `the DCF has the node's values, 1017h among them (${dcf.length} bytes)`);
+  const readBar = await page.$eval('#dcf-bar', (b) => ({ hidden: b.hidden, value: b.value, max: b.max }));
+  check(!readBar.hidden && readBar.max > 1 && readBar.value === readBar.max,
+    `the read-back's progress bar is full (${readBar.value}/${readBar.max} objects)`);
+
+  // Changed in one value (1017h, the producer heartbeat time), and with a
+  // value for 1000h (device type) claimed writable as a DCF of another
+  // device revision might: both are shown against the EDS defaults, then
+  // applied with one result per object; the device refuses 1000h (CiA 301
+  // abort 0601 0002h, read-only), which is highlighted, the rest is written.
+  const hbNow = (await getJson(base, '/networks/1/nodes/10/sdo/1017/0')).value;
+  const hbNew = hbNow === 700 ? 800 : 700;
+  const changed = dcf.replace(/(\[1017\][^[]*?ParameterValue=)[^\r\n]*/i, `$1${hbNew}`)
+    .replace(/(\[1000\][^[]*?AccessType=)ro([^[]*?\r?\n)(\r?\n|$)/i, '$1rw$2ParameterValue=0x12345\n$3');
+  check(changed !== dcf && /\[1000\][^[]*ParameterValue=0x12345/.test(changed), 'the DCF was changed in 1017h and 1000h');
+  await page.setInputFiles('#dcf-file', { name: 'node10-changed.dcf', mimeType: 'text/plain', buffer: Buffer.from(changed) });
+  await page.waitForSelector('#dcf-diff-body tr[data-obj="1017:0"]');
+  const diffRow = await page.$eval('#dcf-diff-body tr[data-obj="1017:0"]', (r) =>
+    ({ diff: r.dataset.diff, cells: [...r.cells].map((c) => c.textContent) }));
+  check(diffRow.diff === '1' && diffRow.cells[3] === `${hbNew} (0x${hbNew.toString(16).toUpperCase().padStart(4, '0')})`,
+    `the diff shows 1017h against its EDS default: ${diffRow.cells.join(' | ')}`);
+  const devType = await page.$eval('#dcf-diff-body tr[data-obj="1000:0"]', (r) => r.dataset.diff);
+  check(devType === '1', 'and 1000h too');
+  check(/differ from the EDS defaults/.test(await page.textContent('#dcf-diff-summary')),
+    `with a summary: ${await page.textContent('#dcf-diff-summary')}`);
+  await page.click('#dcf-apply');
+  await page.waitForSelector('#dcf-results-body tr[data-obj="1017:0"]', { timeout: 30_000 });
+  await page.waitForSelector('#dcf-status[data-kind]:not([data-kind="info"])');
+  const results = await page.$$eval('#dcf-results-body tr[data-obj]', (rows) =>
+    rows.map((r) => ({ obj: r.dataset.obj, result: r.dataset.result, text: r.cells[2].textContent })));
+  const hbResult = results.find((r) => r.obj === '1017:0');
+  const refusedRow = results.find((r) => r.obj === '1000:0');
+  const applyStatus = await page.textContent('#dcf-status');
+  check(results.length > 2 && hbResult.result === 'ok' && results.filter((r) => r.result === 'failed').length === 1,
+    `the apply lists ${results.length} objects, 1017h ${hbResult.text} (${applyStatus})`);
+  const highlight = await page.$eval('#dcf-results-body tr[data-obj="1000:0"] td', (td) =>
+    [getComputedStyle(td).backgroundColor, getComputedStyle(document.querySelector('#dcf-results-body tr[data-result="ok"] td')).backgroundColor]);
+  check(refusedRow.result === 'failed' && /0x06010002/.test(refusedRow.text) && highlight[0] !== highlight[1] &&
+        /1 failed/.test(applyStatus),
+    `1000h's refusal is highlighted (${highlight[0]}) with its abort code: ${refusedRow.text}`);
+  const hbAfter = (await getJson(base, '/networks/1/nodes/10/sdo/1017/0')).value;
+  check(hbAfter === hbNew, `node 10's 1017h is ${hbNew} now (${hbAfter})`);
+  await shot(page, 'dashboard-config-dcf.png');
+
+  // Program download (CiA 302-3): a 192 KiB image; every value the bar takes is recorded.
+  const image = randomBytes(192 * 1024);
+  await page.setInputFiles('#prog-file', { name: 'firmware.bin', mimeType: 'application/octet-stream', buffer: image });
+  await page.evaluate(() => {
+    window.progSeen = [];
+    const bar = document.querySelector('#prog-bar');
+    new MutationObserver(() => window.progSeen.push([bar.value, bar.max]))
+      .observe(bar, { attributes: true, attributeFilter: ['value', 'max'] });
+  });
+  await page.click('#prog-start');
+  await page.waitForSelector('#confirm[open]');
+  check(/stops its program/.test(await page.textContent('#confirm')), 'a program download asks first');
+  await page.click('#confirm-ok');
+  await page.waitForSelector('#prog-status[data-kind="ok"], #prog-status[data-kind="error"]', { timeout: 60_000 });
+  const progText = await page.textContent('#prog-status');
+  check(/identification \d+ \(0x[0-9A-F]{8}\)/.test(progText), `the program download ends with its identification: ${progText}`);
+  const seen = await page.evaluate(() => window.progSeen);
+  const between = seen.filter(([v, m]) => m === image.length && v > 0 && v < m);
+  const last = seen.at(-1);
+  check(between.length > 0 && last[0] === image.length && last[1] === image.length,
+    `the progress bar moved: ${between.length} values between 0 and ${image.length} bytes (e.g. ${between[0]?.[0]}), then full`);
+  await shot(page, 'dashboard-config-program.png');
+
+  // Restore resets the node: it asks, and Cancel sends nothing.
+  const posts = [];
+  page.on('request', (r) => { if (r.method() === 'POST' && /\/(store|restore)$/.test(new URL(r.url()).pathname)) posts.push(r.url()); });
+  await page.click('#node-restore');
+  await page.waitForSelector('#confirm[open]');
+  const ask = await page.textContent('#confirm');
+  await page.click('#confirm-cancel');
+  check(/reset/.test(ask) && posts.length === 0, 'Restore defaults asks first (it resets the node); cancelled, nothing is sent');
+  await page.click('#node-store');
+  await page.waitForSelector('#store-status[data-kind="ok"]');
+  check(posts.length === 1, `Store saves the parameters: ${await page.textContent('#store-status')}`);
+
+
+  // EDS upload to node 11: a broken file is refused with FILE:LINE: reason
+  // and changes nothing; a good one is the node's description at once (its
+  // dictionary is loaded again) and kept in state-dir.
+  await selectNode(page, 11);
+  await page.waitForSelector('#panel-config[data-node="11"] #cfg-source[data-source="config"]');
+  const eds = fs.readFileSync(path.join(here, '..', '..', 'deploy', 'eds', 'cia401-io-module.eds'), 'utf8');
+  const broken = eds.replace(/(\[1001\][^[]*?DefaultValue=)[^\r\n]*/i, '$10x1FF');
+  check(broken !== eds, 'a broken EDS: 1001h (UNSIGNED8) with the default 0x1FF');
+  const errorsBeforeEds = consoleErrors.length;
+  await page.setInputFiles('#eds-file', { name: 'io-broken.eds', mimeType: 'application/octet-stream', buffer: Buffer.from(broken) });
+  await page.click('#eds-upload');
+  await page.waitForSelector('#eds-status[data-kind="error"]');
+  const edsRefused = await page.textContent('#eds-status');
+  check(/^Refused: io-broken\.eds:\d+: .*0x1FF/.test(edsRefused), `the broken EDS is refused with FILE:LINE: reason (${edsRefused})`);
+  check((await getJson(base, '/networks/1/nodes/11/config')).source === 'config', 'and node 11 keeps its settings');
+  const edsErrors = consoleErrors.splice(errorsBeforeEds);
+  check(edsErrors.every((e) => /status of 400/.test(e)), `only the refused upload's 400 was logged (${edsErrors.length})`);
+  const odLoads = [];
+  page.on('request', (r) => { if (/\/nodes\/11\/od$/.test(new URL(r.url()).pathname)) odLoads.push(r.url()); });
+  await page.setInputFiles('#eds-file', { name: 'io-module.eds', mimeType: 'application/octet-stream', buffer: Buffer.from(eds) });
+  await page.click('#eds-upload');
+  await page.waitForSelector('#eds-status[data-kind="ok"]');
+  await page.waitForFunction(() => /state directory/.test(document.querySelector('#cfg-source').textContent));
+  await page.waitForSelector('#od-body tr[data-od="1017:0"]');
+  const usedFile = await page.textContent('#cfg-file');
+  check(odLoads.length > 0 && /net1-node11\.eds$/.test(usedFile),
+    `the good EDS is in use (${await page.textContent('#eds-status')}), kept as ${usedFile}, the dictionary reloaded`);
+
+  check(consoleErrors.length === 0, `no errors in the browser console${consoleErrors.length ? ': ' + consoleErrors.join(' | ') : ''}`);
+  await ctx.close();
+  browsers.splice(browsers.indexOf(ctx), 1);
+  await stopGateway(g);
+}
+
 // ---------------------------------------------------------------- main
 
 try {
@@ -631,6 +810,7 @@ try {
   log(`chromium ${CHROMIUM}, web root ${WEB_ROOT}, artifacts ${ARTIFACTS}`);
   await partDemo();
   await partSparkplug();
+  await partConfig();
   if (process.env.DASHBOARD_TOKEN_TEST === '1') await partToken();
   else log('token part skipped (set DASHBOARD_TOKEN_TEST=1 to run it)');
   await finish(0);
