@@ -90,8 +90,6 @@ TEST(BodyType, OnlyTheApiMediaTypes) {
   EXPECT_TRUE(acceptable_body_type("application/json", true));
   EXPECT_TRUE(acceptable_body_type("Application/JSON; charset=utf-8", true));
   EXPECT_TRUE(acceptable_body_type("application/x-protobuf", true));
-  // A file (PUT .../eds): not CORS-safelisted either, so never sent cross-site without a preflight.
-  EXPECT_TRUE(acceptable_body_type("application/octet-stream", true));
   EXPECT_TRUE(acceptable_body_type(std::nullopt, false));  // POST .../sync without a body
   // What an HTML form or a "simple" cross-site fetch can send.
   EXPECT_FALSE(acceptable_body_type("text/plain", true));
