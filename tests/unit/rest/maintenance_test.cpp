@@ -212,7 +212,9 @@ TEST(RestMaintenance, ARefusedDownloadIsAProblemAndTheProgramIsNotStarted) {
   transfers.attach(*rig.app);
   ASSERT_TRUE(rig.run_until([&] { return rig.all_operational(); }));
   std::string image((std::size_t{4} << 20) + 1, 'x');
-  auto r = rig.request("PUT", kNode10 + "/program/1", image, kOctets);
+  // 4 MiB go over the in-process bus before the device refuses: minutes of
+  // patience under ASan on a loaded 2-core machine.
+  auto r = rig.request("PUT", kNode10 + "/program/1", image, kOctets, std::chrono::minutes(3));
   EXPECT_EQ(r.status, 422) << r.body;
   EXPECT_THAT(r.body, HasSubstr("\"abortCode\":\"0x05040005\""));
   EXPECT_THAT(r.body, HasSubstr("1F50h"));

@@ -78,14 +78,16 @@ struct RestRig {
     return pred();
   }
 
+  // `limit`: how long to wait for the answer (a large upload under ASan on
+  // a loaded machine takes long; this is a deadline, not a timing assertion).
   HttpReply request(std::string method, std::string target, std::string body = {},
-                    std::vector<std::string> headers = {}) {
+                    std::vector<std::string> headers = {}, std::chrono::milliseconds limit = 10s) {
     const bool typed = std::any_of(headers.begin(), headers.end(),
                                    [](const std::string& h) { return h.rfind("Content-Type:", 0) == 0; });
     if (!body.empty() && !typed) headers.push_back("Content-Type: application/json");
     auto f = std::async(std::launch::async, fetch, port, method, target, body, headers);
     auto ready = [&] { return f.wait_for(0s) == std::future_status::ready; };
-    const bool done = run_until(ready, 10s);
+    const bool done = run_until(ready, limit);
     EXPECT_TRUE(done) << method << " " << target << ": no answer";
     if (!done) {
       // Closing every connection ends the client's read, so the future
