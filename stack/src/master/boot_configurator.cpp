@@ -1,11 +1,11 @@
 #include "canopen/master/boot_configurator.hpp"
 
-#include <cstdio>
 #include <string>
 #include <utility>
 
 #include "canopen/master/dcf_transfer.hpp"
 #include "canopen/sdo/abort.hpp"
+#include "runs.hpp"
 
 namespace canopen::master {
 
@@ -28,17 +28,8 @@ class BootErrorCategory final : public std::error_category {
   }
 };
 
-std::string hex32(std::uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "%08X", v);
-  return std::string(buf) + "h";
-}
-
-std::string where(std::uint16_t index, std::uint8_t sub) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "%04Xh sub %u", index, static_cast<unsigned>(sub));
-  return buf;
-}
+using detail::hex32h;
+using od::object_label;
 
 std::uint32_t key(std::uint16_t index, std::uint8_t sub) { return static_cast<std::uint32_t>(index) << 8 | sub; }
 
@@ -263,7 +254,7 @@ void BootConfigurator::submit(std::uint8_t node, const Op& op, bool invalidate_w
   }
   if (!id) {
     const char* what = op.kind == OpKind::Read && !invalidate_write ? "reading " : "writing ";
-    fail(node, id.code(), what + where(op.index, op.sub) + ": " + id.error().detail);
+    fail(node, id.code(), what + object_label(op.index, op.sub) + ": " + id.error().detail);
     return;
   }
   nodes_[node].run->request = *id;
@@ -283,7 +274,7 @@ void BootConfigurator::on_done(std::uint8_t node, std::uint64_t generation, bool
       step(node, now);
       return;
     }
-    std::string detail = (r.upload ? "reading " : "writing ") + where(op.index, op.sub) + ": " + r.error.message();
+    std::string detail = (r.upload ? "reading " : "writing ") + object_label(op.index, op.sub) + ": " + r.error.message();
     if (!r.detail.empty()) detail += " (" + r.detail + ")";
     fail(node, r.error, std::move(detail));
     return;
@@ -291,7 +282,7 @@ void BootConfigurator::on_done(std::uint8_t node, std::uint64_t generation, bool
   if (op.kind == OpKind::Read && !invalidate_write) {
     auto v = decode(DataType::Unsigned32, r.data);
     if (!v) {
-      fail(node, v.code(), "reading " + where(op.index, op.sub) + ": " + std::to_string(r.data.size()) +
+      fail(node, v.code(), "reading " + object_label(op.index, op.sub) + ": " + std::to_string(r.data.size()) +
                                " bytes, expected 4");
       return;
     }
@@ -329,15 +320,15 @@ bool BootConfigurator::check_identity(std::uint8_t node) {
     const auto got = read.find(key(ch.index, ch.sub));
     if (got != read.end()) {
       if (!summary.empty()) summary += ", ";
-      summary += std::string(ch.name) + " " + hex32(got->second);
+      summary += std::string(ch.name) + " " + hex32h(got->second);
     }
     if (!ch.expected) continue;
     // A non-optional read always succeeded here, so `got` is set.
     if (got == read.end() || got->second != *ch.expected) {
       fail(node, ch.error,
-           std::string(ch.name) + " (" + where(ch.index, ch.sub) + ") is " +
-               (got == read.end() ? std::string("unknown") : hex32(got->second)) + ", expected " +
-               hex32(*ch.expected));
+           std::string(ch.name) + " (" + object_label(ch.index, ch.sub) + ") is " +
+               (got == read.end() ? std::string("unknown") : hex32h(got->second)) + ", expected " +
+               hex32h(*ch.expected));
       return false;
     }
   }

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "canopen/sdo/abort.hpp"
+#include "runs.hpp"
 
 namespace canopen::master {
 
@@ -216,13 +217,7 @@ struct DcfReader::Run {
 DcfReader::DcfReader(sdo::SdoClient& client, EventHandler on_event, TimeSource now)
     : client_(client), on_event_(std::move(on_event)), now_(std::move(now)) {}
 
-DcfReader::~DcfReader() {
-  std::vector<sdo::RequestId> pending;
-  for (auto& [node, run] : runs_)
-    if (run.request) pending.push_back(*run.request);
-  runs_.clear();
-  for (const auto id : pending) client_.cancel(id, now_());
-}
+DcfReader::~DcfReader() { detail::drop_runs(client_, runs_, now_()); }
 
 bool DcfReader::busy(std::uint8_t node) const { return runs_.contains(node); }
 
@@ -375,13 +370,7 @@ struct DcfApplier::Run {
 DcfApplier::DcfApplier(sdo::SdoClient& client, NmtSender send_nmt, EventHandler on_event, TimeSource now)
     : client_(client), send_nmt_(std::move(send_nmt)), on_event_(std::move(on_event)), now_(std::move(now)) {}
 
-DcfApplier::~DcfApplier() {
-  std::vector<sdo::RequestId> pending;
-  for (auto& [node, run] : runs_)
-    if (run.request) pending.push_back(*run.request);
-  runs_.clear();
-  for (const auto id : pending) client_.cancel(id, now_());
-}
+DcfApplier::~DcfApplier() { detail::drop_runs(client_, runs_, now_()); }
 
 bool DcfApplier::busy(std::uint8_t node) const { return runs_.contains(node); }
 

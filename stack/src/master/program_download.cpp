@@ -1,26 +1,18 @@
 #include "canopen/master/program_download.hpp"
 
-#include <cstdio>
 #include <utility>
 #include <vector>
 
+#include "canopen/od/object_dictionary.hpp"
 #include "canopen/sdo/abort.hpp"
+#include "runs.hpp"
 
 namespace canopen::master {
 
 namespace {
 
-std::string where(std::uint16_t index, std::uint8_t sub) {
-  char buf[24];
-  std::snprintf(buf, sizeof buf, "%04Xh sub %u", static_cast<unsigned>(index), static_cast<unsigned>(sub));
-  return buf;
-}
-
-std::string hex32(std::uint32_t v) {
-  char buf[16];
-  std::snprintf(buf, sizeof buf, "%08Xh", v);
-  return buf;
-}
+using detail::hex32h;
+using od::object_label;
 
 // The 1F51h command of a control step.
 std::uint8_t control_value(ProgramStep s) {
@@ -64,12 +56,12 @@ struct ProgramDownloader::Run {
       case ProgramStep::StopProgram:
       case ProgramStep::ClearProgram:
       case ProgramStep::StartProgram:
-        return std::string(to_string(s)) + " (" + where(kProgramControl, n) + " := " +
+        return std::string(to_string(s)) + " (" + object_label(kProgramControl, n) + " := " +
                std::to_string(control_value(s)) + ")";
       case ProgramStep::Download:
-        return "download (" + where(kProgramData, n) + ", " + std::to_string(report.bytes) + " bytes)";
+        return "download (" + object_label(kProgramData, n) + ", " + std::to_string(report.bytes) + " bytes)";
       case ProgramStep::ReadIdentification:
-        return "read identification (" + where(kProgramIdentification, n) + ")";
+        return "read identification (" + object_label(kProgramIdentification, n) + ")";
       case ProgramStep::Done: break;
     }
     return std::string(to_string(s));
@@ -79,13 +71,7 @@ struct ProgramDownloader::Run {
 ProgramDownloader::ProgramDownloader(sdo::SdoClient& client, EventHandler on_event, TimeSource now)
     : client_(client), on_event_(std::move(on_event)), now_(std::move(now)) {}
 
-ProgramDownloader::~ProgramDownloader() {
-  std::vector<sdo::RequestId> pending;
-  for (auto& [node, run] : runs_)
-    if (run.request) pending.push_back(*run.request);
-  runs_.clear();  // the cancelled requests' handlers find no run
-  for (const auto id : pending) client_.cancel(id, now_());
-}
+ProgramDownloader::~ProgramDownloader() { detail::drop_runs(client_, runs_, now_()); }
 
 bool ProgramDownloader::busy(std::uint8_t node) const { return runs_.contains(node); }
 
@@ -222,8 +208,8 @@ void ProgramDownloader::on_done(std::uint8_t node, std::uint64_t gen, sdo::Trans
         want && (!run.report.identification || *run.report.identification != *want)) {
       fail(node, make_error_code(TransferError::WrongIdentification), sdo::Origin::Local,
            run.label() + ": " +
-               (run.report.identification ? hex32(*run.report.identification) : std::string("the device has none")) +
-               ", expected " + hex32(*want) + "; program not started");
+               (run.report.identification ? hex32h(*run.report.identification) : std::string("the device has none")) +
+               ", expected " + hex32h(*want) + "; program not started");
       return;
     }
   } else if (!r.ok()) {
@@ -254,7 +240,7 @@ void ProgramDownloader::advance(std::uint8_t node, TimePoint now) {
     runs_.erase(node);
     ev.status = TransferEvent::Status::Done;
     ev.detail = "program " + std::to_string(report.program) + (report.started ? " started" : " downloaded, not started");
-    if (report.identification) ev.detail += ", identification " + hex32(*report.identification);
+    if (report.identification) ev.detail += ", identification " + hex32h(*report.identification);
     emit(ev);
     if (done) done(report);
     return;

@@ -1,8 +1,8 @@
 #include "canopen/pdo/config_reader.hpp"
 
-#include <cstdio>
 #include <utility>
 
+#include "canopen/od/object_dictionary.hpp"
 #include "canopen/sdo/abort.hpp"
 
 namespace canopen::pdo {
@@ -11,12 +11,6 @@ namespace {
 
 std::string label(PdoKey k) {
   return (k.direction == Direction::Transmit ? "TPDO" : "RPDO") + std::to_string(k.number);
-}
-
-std::string where(std::uint16_t index, std::uint8_t sub) {
-  char b[24];
-  std::snprintf(b, sizeof b, "%04Xh sub %u", static_cast<unsigned>(index), static_cast<unsigned>(sub));
-  return b;
 }
 
 }  // namespace
@@ -134,7 +128,7 @@ void PdoConfigReader::on_done(std::uint8_t node, std::uint64_t generation, sdo::
   const PdoKey key = run.plan[run.pdo].key;
   const TimePoint now = now_();
   auto fail_pdo = [&](std::error_code ec, std::string detail) {
-    run.report.pdos.push_back({key, std::nullopt, ec, label(key) + ": " + where(op.index, op.sub) + ": " + detail});
+    run.report.pdos.push_back({key, std::nullopt, ec, label(key) + ": " + od::object_label(op.index, op.sub) + ": " + detail});
     if (++run.pdo == run.plan.size()) return finish(node, false);
     begin_pdo(run);
     step(node, now);
@@ -151,7 +145,7 @@ void PdoConfigReader::on_done(std::uint8_t node, std::uint64_t generation, sdo::
     }
     // Local (timeout, malformed answer): the rest is not asked for.
     run.report.stopped = r.error;
-    run.report.pdos.push_back({key, std::nullopt, r.error, label(key) + ": " + where(op.index, op.sub) + ": " + detail});
+    run.report.pdos.push_back({key, std::nullopt, r.error, label(key) + ": " + od::object_label(op.index, op.sub) + ": " + detail});
     for (std::size_t i = run.pdo + 1; i < run.plan.size(); ++i)
       run.report.pdos.push_back({run.plan[i].key, std::nullopt, r.error, label(run.plan[i].key) + ": not read: " + detail});
     return finish(node, false);
