@@ -10,65 +10,24 @@
 #include <variant>
 #include <vector>
 
-#include "canopen/can/memory_bus.hpp"
-#include "canopen/device.hpp"
-#include "canopen/eds/eds.hpp"
-#include "canopen/network.hpp"
-#include "canopen/od/gateway_dictionary.hpp"
+#include "network_rig.hpp"
 #include "sim/device_objects.hpp"
 
 namespace canopen {
 namespace {
 
 using namespace std::chrono_literals;
-constexpr std::uint8_t kNode = 5;
+constexpr std::uint8_t kNode = test::NetworkRig::kNode;
 
-struct Rig {
-  Rig() {
+// The gateway's network and a CiA 401 I/O module with the simulator's
+// CiA 302-3 program objects, powered on.
+struct Rig : test::NetworkRig {
+  Rig() : NetworkRig("deploy/eds/cia401-io-module.eds") {
     sim::install_program_objects(device_od);
-    dev_ep->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs) device->on_frame(f, clock.now());
-    });
-    gw_ep->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs) net.on_frame(f, clock.now());
-    });
-    DeviceConfig cfg;
-    cfg.node_id = kNode;
-    device = std::make_unique<Device>(device_od, cfg, [this](const can::Frame& f) { dev_ep->send(f); });
-    device->start(clock.now());
+    power_on();
     run_for(10ms);
   }
-  void run_for(Duration d) {
-    const TimePoint end = clock.now() + d;
-    for (;;) {
-      bus.deliver();
-      const TimePoint next = std::min(net.next_deadline(), device->next_deadline());
-      if (next > end) break;
-      if (next > clock.now()) clock.advance_to(next);
-      if (net.next_deadline() <= clock.now()) net.on_time(clock.now());
-      if (device->next_deadline() <= clock.now()) device->on_time(clock.now());
-    }
-    clock.advance_to(end);
-    bus.deliver();
-  }
-  std::vector<std::pair<std::uint64_t, TransferEvent>> transfers() const {
-    std::vector<std::pair<std::uint64_t, TransferEvent>> out;
-    for (const auto& e : events)
-      if (const auto* t = std::get_if<TransferEvent>(&e.body)) out.emplace_back(e.seq, *t);
-    return out;
-  }
-
-  FakeClock clock;
-  can::MemoryBus bus;
-  std::unique_ptr<can::MemoryEndpoint> gw_ep = bus.attach("gateway");
-  std::unique_ptr<can::MemoryEndpoint> dev_ep = bus.attach("device");
-  od::ObjectDictionary own = od::make_gateway_dictionary(127, {});
-  eds::DeviceDescription eds =
-      eds::load_device_description(CANOPEN_SOURCE_DIR "/deploy/eds/cia401-io-module.eds", kNode);
-  od::ObjectDictionary device_od = eds.od;
-  std::unique_ptr<Device> device;
-  std::vector<Event> events;
-  Network net{own, [this](const can::Frame& f) { gw_ep->send(f); }, [this](const Event& e) { events.push_back(e); }};
+  std::vector<std::pair<std::uint64_t, TransferEvent>> transfers() const { return events_of<TransferEvent>(); }
 };
 
 TEST(NetworkTransfer, ReadDcf_TransferEventsInTheNetworksNumberedStream_ThenTheDcfText) {

@@ -10,17 +10,13 @@
 #include <variant>
 #include <vector>
 
-#include "canopen/can/memory_bus.hpp"
-#include "canopen/device.hpp"
-#include "canopen/eds/eds.hpp"
-#include "canopen/network.hpp"
-#include "canopen/od/gateway_dictionary.hpp"
+#include "network_rig.hpp"
 
 namespace canopen {
 namespace {
 
 using namespace std::chrono_literals;
-constexpr std::uint8_t kNode = 5;
+constexpr std::uint8_t kNode = test::NetworkRig::kNode;
 
 Bytes u32(std::uint32_t v) {
   return {static_cast<std::uint8_t>(v), static_cast<std::uint8_t>(v >> 8), static_cast<std::uint8_t>(v >> 16),
@@ -29,25 +25,8 @@ Bytes u32(std::uint32_t v) {
 
 // The gateway's network and a CiA 402 drive whose dictionary starts as its
 // EDS; `device_od` is what the device really holds.
-struct Rig {
-  Rig() {
-    DeviceConfig cfg;
-    cfg.node_id = kNode;
-    dev_ep->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs)
-        if (device) device->on_frame(f, clock.now());
-    });
-    gw_ep->on_frames([this](std::span<const can::Frame> fs) {
-      for (const auto& f : fs) net.on_frame(f, clock.now());
-    });
-  }
-  // Powers the device on (boot-up) after the test changed its dictionary.
-  void power_on() {
-    DeviceConfig cfg;
-    cfg.node_id = kNode;
-    device = std::make_unique<Device>(device_od, cfg, [this](const can::Frame& f) { dev_ep->send(f); });
-    device->start(clock.now());
-  }
+struct Rig : test::NetworkRig {
+  Rig() : NetworkRig("deploy/eds/cia402-drive.eds") {}
   void start_operational() {
     power_on();
     run_for(10ms);
@@ -55,63 +34,13 @@ struct Rig {
     run_for(10ms);
     ASSERT_EQ(device->state(), NmtState::Operational);
   }
-  void run_for(Duration d) {
-    const TimePoint end = clock.now() + d;
-    for (;;) {
-      bus.deliver();
-      TimePoint next = net.next_deadline();
-      if (device) next = std::min(next, device->next_deadline());
-      if (next > end) break;
-      if (next > clock.now()) clock.advance_to(next);
-      if (net.next_deadline() <= clock.now()) net.on_time(clock.now());
-      if (device && device->next_deadline() <= clock.now()) device->on_time(clock.now());
-    }
-    clock.advance_to(end);
-    bus.deliver();
-  }
-  // One SDO download through the gateway's client (as REST/MQTT do); the
-  // device's answer.
-  std::error_code write(std::uint16_t index, std::uint8_t sub, Bytes data) {
-    std::optional<std::error_code> result;
-    sdo::Request r;
-    r.node = kNode;
-    r.index = index;
-    r.sub = sub;
-    r.on_done = [&](sdo::TransferResult&& res) { result = res.error; };
-    EXPECT_TRUE(net.sdo().download(std::move(r), std::move(data), clock.now()));
-    run_for(20ms);
-    EXPECT_TRUE(result.has_value()) << "no answer";
-    return result.value_or(make_error_code(SdoAbort::Timeout));
-  }
-  std::vector<PdoEvent> pdos() const {
-    std::vector<PdoEvent> out;
-    for (const auto& e : events)
-      if (const auto* p = std::get_if<PdoEvent>(&e.body)) out.push_back(*p);
-    return out;
-  }
-  std::vector<BootConfigEvent> boot_steps() const {
-    std::vector<BootConfigEvent> out;
-    for (const auto& e : events)
-      if (const auto* b = std::get_if<BootConfigEvent>(&e.body)) out.push_back(*b);
-    return out;
-  }
+  std::vector<PdoEvent> pdos() const { return bodies<PdoEvent>(); }
+  std::vector<BootConfigEvent> boot_steps() const { return bodies<BootConfigEvent>(); }
   // The device sends `f` as if it came from its TPDO producer.
   void inject(const can::Frame& f) {
     dev_ep->send(f);
     run_for(1ms);
   }
-
-  FakeClock clock;
-  can::MemoryBus bus;
-  std::unique_ptr<can::MemoryEndpoint> gw_ep = bus.attach("gateway");
-  std::unique_ptr<can::MemoryEndpoint> dev_ep = bus.attach("device");
-  od::ObjectDictionary own = od::make_gateway_dictionary(127, {});
-  eds::DeviceDescription eds =
-      eds::load_device_description(CANOPEN_SOURCE_DIR "/deploy/eds/cia402-drive.eds", kNode);
-  od::ObjectDictionary device_od = eds.od;
-  std::unique_ptr<Device> device;
-  std::vector<Event> events;
-  Network net{own, [this](const can::Frame& f) { gw_ep->send(f); }, [this](const Event& e) { events.push_back(e); }};
 };
 
 // 7.5.2.39 (TPDO mapping) with the sequence of 7.5.2.38/7.5.2.39: disable,
