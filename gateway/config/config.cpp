@@ -694,6 +694,10 @@ Config merge(Config c, const CliOptions& cli) {
     // The gateway produces SYNC there, so the drive's synchronous TPDOs
     // (position, velocity) flow too.
     sim.sync.period = std::chrono::milliseconds(100);
+    // The in-process bus has no bit rate of its own; counting its frames as
+    // on a 250 kbit/s bus (CiA 301's most common rate) gives the demo a bus
+    // load to show in REST, /metrics and the dashboard.
+    sim.bitrate = 250000;
     c.networks.push_back(std::move(sim));
   }
   // --eds NODE=FILE describes NODE on every network.

@@ -600,6 +600,7 @@ TEST(Config, DemoAddsASimulatedNetworkWithoutAuthOnLoopback) {
   ASSERT_EQ(c.networks.size(), 1U);
   EXPECT_TRUE(c.networks[0].simulated);
   EXPECT_EQ(c.networks[0].sync.period, 100ms) << "SYNC for the drive's synchronous TPDOs";
+  EXPECT_EQ(c.networks[0].bitrate, 250000U) << "a bus load to show (issue 18)";
   EXPECT_TRUE(c.demo);
   EXPECT_TRUE(c.http.loopback());
   EXPECT_FALSE(c.http.auth);

@@ -268,7 +268,7 @@ TEST(CaptureRoute, BadQueriesAre400UnknownNetwork404) {
 // Bus load: null with the reason without a bit rate; with one, a share of it.
 TEST(BusLoadRoute, PercentWithTheConfiguredBitRateOnly) {
   {
-    RestRig rig;
+    RestRig rig({}, [](Config& c) { c.networks.at(0).bitrate = 0; });
     const auto n = rig.request("GET", "/api/v1/networks/1").json();
     EXPECT_TRUE(n.at("busLoad").at("percent1s").is_null());
     EXPECT_EQ(n.at("busLoad").at("reason"), "no bitrate configured for this network");

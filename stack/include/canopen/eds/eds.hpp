@@ -126,6 +126,12 @@ struct EntryFacts {
   std::uint32_t obj_flags = 0;   // ObjFlags of the object section and of the sub-object section, OR-ed
   bool parameter_value = false;  // a ParameterValue or [xxxxValue] entry gave the value
   bool hex_default = false;      // DefaultValue was written in hex (0x...)
+  // The physical unit and scale vendors write into their files (no CiA 306
+  // key exists; see the reader for the conventions it understands): the
+  // value in `unit` is the raw value times `factor`. Empty / nullopt when the
+  // file says nothing, and then values are shown raw.
+  std::string unit;
+  std::optional<double> factor;
 };
 
 struct DeviceDescription {
