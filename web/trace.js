@@ -56,6 +56,18 @@ export function candumpLine(f, iface) {
   return `(${f.sec}.${f.usec}) ${iface} ${frame}`;
 }
 
+// Fixed-size ring of the newest frames: a push is O(1) at any frame rate.
+class Ring {
+  constructor(size) { this.size = size; this.clear(); }
+  clear() { this.items = new Array(this.size); this.start = 0; this.length = 0; }
+  push(x) {
+    this.items[(this.start + this.length) % this.size] = x;
+    if (this.length < this.size) this.length++; else this.start = (this.start + 1) % this.size;
+  }
+  at(i) { return this.items[(this.start + i) % this.size]; } // 0 = oldest
+  filter(fn) { const out = []; for (let i = 0; i < this.length; i++) if (fn(this.at(i))) out.push(this.at(i)); return out; }
+}
+
 const csvField = (v) => {
   const s = v === undefined || v === null ? '' : String(v);
   return /[",\n\r]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s;
@@ -90,7 +102,7 @@ export function setupTrace(ctx) {
     live: false,       // the user wants the trace (Start)
     paused: false,
     ws: null, opened: false, retry: 0, timer: null,
-    buffer: [],        // frames, oldest first, at most BUFFER_MAX
+    buffer: new Ring(BUFFER_MAX), // the newest frames, for the table and the exports
     pending: [],       // matching frames not yet in the table
     received: 0, lost: 0,
     ids: [],           // COB-ID ranges in force ([] = all)
@@ -162,7 +174,7 @@ export function setupTrace(ctx) {
   function rebuild() {
     t.pending = [];
     const rows = [];
-    for (let i = t.buffer.length - 1; i >= 0 && rows.length < ROWS_MAX; i--) if (matches(t.buffer[i])) rows.push(t.buffer[i]);
+    for (let i = t.buffer.length - 1; i >= 0 && rows.length < ROWS_MAX; i--) if (matches(t.buffer.at(i))) rows.push(t.buffer.at(i));
     rows.reverse();
     if (rows.length) body.replaceChildren(...rows.map(row));
     else body.replaceChildren(el('tr', { class: 'empty' }, el('td', { colspan: 8, text: t.live ? 'no frames yet' : 'press Start to see the bus' })));
@@ -174,7 +186,6 @@ export function setupTrace(ctx) {
     const f = toFrame(m);
     t.received++;
     t.buffer.push(f);
-    if (t.buffer.length > BUFFER_MAX) t.buffer.splice(0, t.buffer.length - BUFFER_MAX);
     if (!t.paused && matches(f)) {
       t.pending.push(f);
       if (t.pending.length > ROWS_MAX * 2) t.pending.splice(0, t.pending.length - ROWS_MAX);
@@ -369,7 +380,7 @@ export function setupTrace(ctx) {
 
   $('#trace-live').addEventListener('click', () => setLive(!t.live));
   $('#trace-pause').addEventListener('click', () => setPaused(!t.paused));
-  $('#trace-clear').addEventListener('click', () => { t.buffer = []; t.received = 0; t.lost = 0; rebuild(); });
+  $('#trace-clear').addEventListener('click', () => { t.buffer.clear(); t.received = 0; t.lost = 0; rebuild(); });
   $('#trace-export-candump').addEventListener('click', () => exportFrames('candump'));
   $('#trace-export-csv').addEventListener('click', () => exportFrames('csv'));
   $('#trace-service').replaceChildren(el('option', { value: '', text: 'all' }),
@@ -389,7 +400,7 @@ export function setupTrace(ctx) {
     // The network changed (or the token): a new trace and a new bus load history.
     restart() {
       close();
-      t.buffer = []; t.pending = []; t.received = 0; t.lost = 0;
+      t.buffer.clear(); t.pending = []; t.received = 0; t.lost = 0;
       load.t = []; load.p1 = []; load.p10 = [];
       if (load.chart) load.chart.setData([[], [], []]);
       rebuild();
