@@ -336,12 +336,11 @@ export function setupTrace(ctx) {
     load.chart = new window.uPlot({
       width: Math.max(200, box.clientWidth || 300), height: 110, class: 'bus-load-plot',
       legend: { show: false }, cursor: { show: true, x: true, y: false }, select: { show: false },
-      // At least 2 minutes on the time axis, so the first points do not span years.
-      scales: { x: { time: true, range: (u, min, max) => [Math.min(min ?? Date.now() / 1000, (max ?? Date.now() / 1000) - 120), max ?? Date.now() / 1000] },
-                y: { range: (u, min, max) => [0, Math.max(5, Math.ceil((max || 0) * 1.2))] } },
+      // The x scale is set to the last LOAD_KEEP_S seconds on each update (showLoad).
+      scales: { x: { time: true }, y: { range: (u, min, max) => [0, Math.max(5, Math.ceil((max || 0) * 1.2))] } },
       axes: [{ ...axis }, { ...axis, size: 50, values: (u, v) => v.map((x) => `${x} %`) }],
-      series: [{}, { label: '1 s', stroke: css('--accent', '#1f6feb'), width: 1.5, fill: css('--accent-fill', 'rgba(31,111,235,.12)'), points: { show: false } },
-               { label: '10 s', stroke: css('--muted', '#888'), width: 1, dash: [4, 3], points: { show: false } }],
+      series: [{}, { label: '1 s', stroke: css('--accent', '#1f6feb'), width: 1.5, fill: css('--accent-fill', 'rgba(31,111,235,.12)') },
+               { label: '10 s', stroke: css('--muted', '#888'), width: 1, dash: [4, 3] }],
     }, [[], [], []], box);
     new ResizeObserver(() => load.chart.setSize({ width: Math.max(200, box.clientWidth), height: 110 })).observe(box);
     return load.chart;
@@ -368,7 +367,11 @@ export function setupTrace(ctx) {
     load.t.push(now); load.p1.push(p1); load.p10.push(p10);
     while (load.t.length && load.t[0] < now - LOAD_KEEP_S) { load.t.shift(); load.p1.shift(); load.p10.shift(); }
     const c = loadChart();
-    if (c) c.setData([load.t, load.p1, load.p10]);
+    if (c) {
+      // A fixed window: the first points do not stretch over the whole width.
+      c.setData([load.t, load.p1, load.p10], false);
+      c.setScale('x', { min: now - LOAD_KEEP_S, max: now });
+    }
   }
 
   async function pollLoad() {
