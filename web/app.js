@@ -4,6 +4,8 @@
 // The DOM is built with textContent only: names and descriptions come from
 // EDS files and devices and must never be interpreted as HTML.
 
+import { setupTrace } from './trace.js';
+
 const TOKEN_KEY = 'canopen-gateway.token';
 const CHART_WINDOW_S = 60;      // seconds of history shown in the small charts
 const HISTORY_MAX = 1200;       // samples kept per value (bounds memory at high PDO rates)
@@ -441,6 +443,7 @@ function restart() {
   state.denied = {};
   if (state.selected !== null) { renderOd(state.selected); renderConfig(state.selected); }
   loadAll();
+  trace.restart();
 }
 
 // ---------------------------------------------------------------- WebSocket
@@ -1703,9 +1706,13 @@ function tick() {
   if (state.dirty.emcy) { state.dirty.emcy = false; renderEmcy(); }
 }
 
+let trace = null; // the bus trace panel and bus load (trace.js)
+
 function start() {
   setupToken();
   setupEvents();
+  trace = setupTrace({ $, el, api, toast, downloadFile, net: () => state.net, token: () => state.token,
+                       authBlocked: () => state.authBlocked });
   setInterval(tick, RENDER_INTERVAL_MS);
   setInterval(() => { renderAges(); renderMeta(); }, 500);
   // Counters and bus facts are cheap to poll; everything else arrives live.

@@ -251,6 +251,29 @@ std::string decode(const Frame& f, const DecodeContext& ctx) {
   }
 }
 
+Service classify(const Frame& f) {
+  // Mirrors decode(): every frame decode() calls "raw" is "other" here.
+  if (f.extended()) return {"other"};
+  const std::uint32_t id = f.id;
+  const auto node = static_cast<std::uint8_t>(id & 0x7F);
+  if (id == 0x000) {
+    if (f.remote()) return {"other"};
+    return {"nmt", static_cast<std::uint8_t>(f.len == 2 && f.data[1] <= 0x7F ? f.data[1] : 0)};
+  }
+  if (id == 0x080) return {f.remote() ? "other" : "sync"};
+  if (id == 0x100) return {f.remote() ? "other" : "time"};
+  if (id == canopen::lss::kMasterCobId || id == canopen::lss::kSlaveCobId) return {"lss"};
+  if (node == 0) return {"other"};
+  switch (id & 0x780) {
+    case 0x080: return {"emcy", node};
+    case 0x180: case 0x280: case 0x380: case 0x480: return {"tpdo", node};
+    case 0x200: case 0x300: case 0x400: case 0x500: return {"rpdo", node};
+    case 0x580: case 0x600: return f.remote() ? Service{"other"} : Service{"sdo", node};
+    case 0x700: return {"error-control", node};
+    default: return {"other"};
+  }
+}
+
 void track_sdo_block(const Frame& f, SdoBlockState& st) {
   if (f.extended() || f.remote() || f.len != 8) return;
   const std::uint32_t fn = f.id & 0x780;

@@ -24,6 +24,7 @@
 #include <bitset>
 #include <cstdint>
 #include <string>
+#include <string_view>
 
 #include "canopen/can/frame.hpp"
 
@@ -43,6 +44,19 @@ struct DecodeContext {
 
 // The summary of `f`; never empty.
 std::string decode(const canopen::can::Frame& f, const DecodeContext& ctx);
+
+// The same classification as structured fields, for clients that filter
+// (the dashboard's trace view): a short stable token per service and the
+// node a frame is about. Service tokens: "nmt", "sync", "time", "emcy",
+// "tpdo", "rpdo", "sdo", "error-control" (heartbeat, boot-up, node
+// guarding), "lss", "other" (what decode() calls "raw"). node: the node-ID
+// in the COB-ID (EMCY, PDO, SDO, error control) or the one an NMT command
+// addresses; 0 = none (broadcast NMT, SYNC, TIME, LSS, other).
+struct Service {
+  std::string_view service;  // static storage
+  std::uint8_t node = 0;
+};
+Service classify(const canopen::can::Frame& f);
 
 // Follows block transfers (CiA 301 7.2.4.3.9-15): call with every frame in
 // bus order, after decode() of the same frame.

@@ -29,7 +29,7 @@ void NetworkTrace::tap(const Traced& t, SteadyTime now) {
     Message msg;
     for (auto& [id, c] : clients_) {
       if (!c.wants(t.frame.id)) continue;
-      if (!msg) msg = std::make_shared<const std::string>(frame_json(t, decode(t.frame, decode_)));
+      if (!msg) msg = std::make_shared<const std::string>(frame_json(t, decode(t.frame, decode_), classify(t.frame)));
       c.deliver(msg);
     }
   }

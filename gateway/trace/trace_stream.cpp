@@ -10,7 +10,7 @@
 
 namespace gateway::trace {
 
-std::string frame_json(const Traced& t, std::string_view decoded) {
+std::string frame_json(const Traced& t, std::string_view decoded, Service service) {
   const auto& f = t.frame;
   const auto us =
       std::chrono::duration_cast<std::chrono::microseconds>(f.timestamp.time_since_epoch()).count();
@@ -33,6 +33,10 @@ std::string frame_json(const Traced& t, std::string_view decoded) {
   core::append_hex(s, f.payload());
   s += "\",\"decoded\":";
   s += boost::json::serialize(boost::json::value(boost::json::string_view(decoded.data(), decoded.size())));
+  s += ",\"service\":\"";
+  s += service.service;  // a fixed token, nothing to escape
+  s += '"';
+  if (service.node != 0) s += ",\"node\":" + std::to_string(service.node);
   s += '}';
   return s;
 }

@@ -16,16 +16,19 @@
 #include <vector>
 
 #include "capture.hpp"
+#include "frame_decode.hpp"
 
 namespace gateway::trace {
 
 using Message = std::shared_ptr<const std::string>;
 
 // {"t":"2026-11-24T17:46:31.123456Z","id":389,"ext":false,"rtr":false,
-//  "fd":false,"dir":"rx","data":"0102","decoded":"TPDO1 5"}
+//  "fd":false,"dir":"rx","data":"0102","decoded":"TPDO1 5",
+//  "service":"tpdo","node":5}
 // t: RFC 3339 UTC with microseconds; data: lower-case hex of the payload
-// (empty for a remote frame).
-std::string frame_json(const Traced& t, std::string_view decoded);
+// (empty for a remote frame); service and node from classify() (node
+// absent when the frame is about no single node).
+std::string frame_json(const Traced& t, std::string_view decoded, Service service);
 
 // The client's filter message: {"ids": [[from, to], ...]}: frames whose
 // identifier lies in one of the inclusive ranges (0..1FFFFFFFh, from <= to,

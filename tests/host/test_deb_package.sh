@@ -59,7 +59,9 @@ cat > "$T/expected" <<EOF
 /usr/share/canopen-gateway/eds/cia401-io-module.eds
 /usr/share/canopen-gateway/eds/cia402-drive.eds
 /usr/share/canopen-gateway/gateway.example.yaml
+/usr/share/canopen-gateway/web/app.js
 /usr/share/canopen-gateway/web/index.html
+/usr/share/canopen-gateway/web/trace.js
 /usr/share/doc/canopen-gateway/changelog.gz
 /usr/share/doc/canopen-gateway/copyright
 /usr/share/lintian/overrides/canopen-gateway

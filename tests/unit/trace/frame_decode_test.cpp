@@ -192,5 +192,49 @@ TEST(FrameDecode, UnknownIdsAreRaw) {
   check({{"123#DEADBEEF", "raw"}, {"180#01", "raw"}, {"12345678#01", "raw"}, {"7FF#00", "raw"}});
 }
 
+// The structured service and node of every frame (the trace message's
+// "service" and "node", which the dashboard filters on): one row per CiA 301
+// service of the predefined connection set (7.3.5 table 72); node 0 = none.
+// Whatever decode() calls raw is "other".
+TEST(FrameClassify, ServiceAndNodePerCobId_Cia301_7_3_5) {
+  struct C {
+    const char* frame;
+    std::string_view service;
+    int node;
+  };
+  for (const auto& c : std::vector<C>{
+           {"000#0100", "nmt", 0},            // start all: no single node
+           {"000#020A", "nmt", 10},           // addressed to node 10
+           {"000#01", "nmt", 0},              // malformed: no node to name
+           {"080#", "sync", 0},
+           {"080#05", "sync", 0},
+           {"100#000000000000", "time", 0},
+           {"08A#1032040000000000", "emcy", 10},
+           {"18A#0102", "tpdo", 10},
+           {"48A#R8", "tpdo", 10},            // remote request of TPDO4
+           {"20A#01", "rpdo", 10},
+           {"50A#01", "rpdo", 10},
+           {"58A#4318100178563412", "sdo", 10},
+           {"60A#4018100100000000", "sdo", 10},
+           {"70A#05", "error-control", 10},   // heartbeat
+           {"70A#00", "error-control", 10},   // boot-up
+           {"70A#R1", "error-control", 10},   // guard request
+           {"7E5#0401000000000000", "lss", 0},
+           {"7E4#5E05000000000000", "lss", 0},
+           {"123#DEADBEEF", "other", 0},
+           {"180#01", "other", 0},            // node 0
+           {"60A#R8", "other", 0},            // no remote SDO
+           {"12345678#01", "other", 0},       // 29-bit
+       }) {
+    auto f = canopen::can::parse_frame(c.frame);
+    ASSERT_TRUE(f) << c.frame;
+    const Service s = classify(*f);
+    EXPECT_EQ(s.service, c.service) << c.frame;
+    EXPECT_EQ(s.node, c.node) << c.frame;
+    DecodeContext ctx;
+    EXPECT_EQ(s.service == "other", decode(*f, ctx) == "raw") << c.frame;
+  }
+}
+
 }  // namespace
 }  // namespace gateway::trace

@@ -39,6 +39,8 @@ TEST(NetworkTrace, RxAndTxReachRingClientsAndLoadWithTheirDirection) {
   EXPECT_EQ(v.at("decoded").as_string(), "SDO tx 5 upload 1018h:01");
   v = boost::json::parse(a[1]);
   EXPECT_EQ(v.at("decoded").as_string(), "HB 5 operational");
+  EXPECT_EQ(v.at("service").as_string(), "error-control");
+  EXPECT_EQ(v.at("node").as_int64(), 5);
   EXPECT_EQ(v.at("t").as_string(), "2023-11-14T22:13:20.001000Z");
   v = boost::json::parse(a[2]);
   EXPECT_EQ(v.at("dir").as_string(), "rx");

@@ -15,17 +15,21 @@ Traced traced(const char* text, Direction d = Direction::Rx) {
   return t;
 }
 
-// The contract's shape: t (RFC 3339, µs), id, ext, rtr, fd, dir, data, decoded.
+// The contract's shape: t (RFC 3339, µs), id, ext, rtr, fd, dir, data,
+// decoded; plus service and node (docs/reference/websocket.md "Bus trace").
 TEST(TraceMessage, ContractShape) {
-  EXPECT_EQ(frame_json(traced("185#0A0B"), "TPDO1 5"),
-            R"({"t":"2023-11-14T22:13:20.123456Z","id":389,"ext":false,"rtr":false,"fd":false,"dir":"rx","data":"0a0b","decoded":"TPDO1 5"})");
-  const auto v = boost::json::parse(frame_json(traced("12345678#R2", Direction::Tx), "raw \"x\""));
+  EXPECT_EQ(frame_json(traced("185#0A0B"), "TPDO1 5", {"tpdo", 5}),
+            R"({"t":"2023-11-14T22:13:20.123456Z","id":389,"ext":false,"rtr":false,"fd":false,"dir":"rx","data":"0a0b","decoded":"TPDO1 5","service":"tpdo","node":5})");
+  const auto v =
+      boost::json::parse(frame_json(traced("12345678#R2", Direction::Tx), "raw \"x\"", {"other", 0}));
   EXPECT_EQ(v.at("id").as_int64(), 0x12345678);
   EXPECT_TRUE(v.at("ext").as_bool());
   EXPECT_TRUE(v.at("rtr").as_bool());
   EXPECT_EQ(v.at("dir").as_string(), "tx");
   EXPECT_EQ(v.at("data").as_string(), "");
   EXPECT_EQ(v.at("decoded").as_string(), "raw \"x\"");
+  EXPECT_EQ(v.at("service").as_string(), "other");
+  EXPECT_FALSE(v.as_object().contains("node"));  // about no single node: absent, not 0
 }
 
 TEST(IdFilter, RangesSelectFrames) {
