@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -56,12 +57,48 @@ struct Request {
   std::optional<std::string_view> header(std::string_view name) const;
 };
 
+// The body of a streamed response (Response::stream): bytes a route
+// produces over time (a live capture), sent as they come: HTTP/1.1 chunked
+// transfer encoding, or to an HTTP/1.0 client the raw bytes ended by the
+// close. The connection closes after the body.
+//
+// Thread safety: every call on the io_context thread.
+class BodySink {
+ public:
+  virtual ~BodySink() = default;
+  // Queues `bytes` behind what is waiting. False, with nothing queued, when
+  // the client is gone, the body is finished, or the bytes would take what
+  // waits for a client that does not read beyond the response's
+  // stream_buffer_bytes: the caller then drops (and counts) them. Never
+  // blocks and never calls on_close.
+  virtual bool write(std::string_view bytes) = 0;
+  // Ends the body after what is queued plus `tail` (queued even beyond the
+  // bound: keep it small). Later writes and finishes are ignored.
+  virtual void finish(std::string_view tail = {}) = 0;
+  // True once the connection is gone (client closed or reset, write error,
+  // server stopping); what was queued is freed then.
+  virtual bool closed() const = 0;
+  // Called once, on the io_context thread but never from inside write() or
+  // finish(), when the connection goes away before finish(): the route MUST
+  // stop producing. Cleared after the call and by finish(), so it may hold
+  // the route's state.
+  std::function<void()> on_close;
+};
+
 struct Response {
   int status = 200;
   std::string content_type = "application/json";
   std::string body;
   // Extra header fields (e.g. {"Allow", "GET, PUT"}, {"WWW-Authenticate", ...}).
   std::vector<std::pair<std::string, std::string>> headers;
+  // A streamed body: when set, the server sends the status and header
+  // fields at once (no Content-Length; `body` is ignored), then calls
+  // `stream` on the io_context thread with the sink the route writes the
+  // body to, and closes the connection after it. A HEAD request gets the
+  // header fields only and `stream` is not called.
+  std::function<void(std::shared_ptr<BodySink>)> stream;
+  // How much of a streamed body may wait for a client that does not read.
+  std::size_t stream_buffer_bytes = 1u << 20;
 
   // RFC 9457 problem document: {"type":"about:blank","title":<reason>,
   // "status":<status>,"detail":<detail>} as application/problem+json

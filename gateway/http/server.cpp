@@ -459,6 +459,64 @@ struct PendingReply {
   std::atomic<bool> done{false};
 };
 
+// The sink of a streamed response: what the route wrote and the
+// connection has not yet taken (at most `limit` bytes, plus the bytes in
+// flight), finished or not, closed or not. The connection pulls from it.
+class StreamBody final : public BodySink {
+ public:
+  StreamBody(std::weak_ptr<Connection> conn, std::size_t limit) : conn_(std::move(conn)), limit_(limit) {}
+
+  bool write(std::string_view bytes) override {
+    if (closed_ || finished_) return false;
+    if (bytes.empty()) return true;
+    // One piece larger than the bound still goes when nothing waits.
+    if (waiting() > 0 && waiting() + bytes.size() > limit_) return false;
+    pending_.append(bytes);
+    kick();
+    return true;
+  }
+  void finish(std::string_view tail) override {
+    if (closed_ || finished_) return;
+    finished_ = true;
+    on_close = nullptr;
+    pending_.append(tail);
+    kick();
+  }
+  bool closed() const override { return closed_; }
+
+  // Connection side.
+  std::size_t waiting() const { return pending_.size() + in_flight_; }
+  bool finished() const { return finished_; }
+  // The bytes to write next (all that waits), counted until written().
+  std::string take() {
+    std::string out;
+    out.swap(pending_);
+    in_flight_ = out.size();
+    return out;
+  }
+  void written() { in_flight_ = 0; }
+  void close() {
+    if (closed_) return;
+    closed_ = true;
+    pending_ = {};
+    in_flight_ = 0;
+    if (auto f = std::move(on_close)) {
+      on_close = nullptr;
+      f();
+    }
+  }
+
+ private:
+  void kick();
+
+  std::weak_ptr<Connection> conn_;
+  std::size_t limit_;
+  std::string pending_;
+  std::size_t in_flight_ = 0;
+  bool finished_ = false;
+  bool closed_ = false;
+};
+
 class Connection : public Closable, public std::enable_shared_from_this<Connection> {
  public:
   Connection(std::shared_ptr<HttpServer::Impl> impl, SlotPtr slot, std::string peer, bool tls)
@@ -471,6 +529,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     impl_->connections.emplace(id_, std::weak_ptr<Closable>());
   }
   ~Connection() override {
+    if (body_) body_->close();
     set_idle(false);
     impl_->connections.erase(id_);
     impl_->counters.active.fetch_sub(1, std::memory_order_relaxed);
@@ -749,10 +808,8 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     upgrade(std::move(breq), false, std::move(accept.source));
   }
 
-  // Builds the Beast response and hands it to the stream.
-  void send(Response r) {
-    impl_->counters.count_status(r.status);
-    BeastResponse res;
+  // Status line and header fields every answer carries.
+  void fill_head(bhttp::response_header<>& res, const Response& r) const {
     res.version(version_ == 10 ? 10 : 11);
     res.result(static_cast<unsigned>(r.status));
     res.set(bhttp::field::server, "canopen-gateway");
@@ -765,7 +822,18 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     res.set("X-Frame-Options", "DENY");
     res.set("Referrer-Policy", "no-referrer");
     if (tls_) res.set("Strict-Transport-Security", "max-age=31536000");
-    for (auto& [k, v] : r.headers) res.set(k, v);
+    for (const auto& [k, v] : r.headers) res.set(k, v);
+  }
+
+  // Builds the Beast response and hands it to the stream.
+  void send(Response r) {
+    if (r.stream) {
+      keep_alive_ = false;  // a streamed body ends with the connection
+      if (!head_) return start_stream(std::move(r));
+    }
+    impl_->counters.count_status(r.status);
+    BeastResponse res;
+    fill_head(res, r);
     res.keep_alive(keep_alive_ && !impl_->stopped);
     res.body() = std::move(r.body);
     res.prepare_payload();
@@ -773,7 +841,72 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
     write(std::move(res));
   }
 
+  // The header now, the body as the route writes it to the sink: chunked
+  // for HTTP/1.1, raw until the close for HTTP/1.0.
+  void start_stream(Response r) {
+    impl_->counters.count_status(r.status);
+    auto head = std::make_unique<StreamHead>();
+    fill_head(*head, r);
+    head->keep_alive(false);
+    chunked_ = version_ != 10;
+    head->chunked(chunked_);
+    body_ = std::make_shared<StreamBody>(weak_from_this(), r.stream_buffer_bytes);
+    write_stream_head(std::move(head));
+    try {
+      r.stream(body_);  // what it writes now waits for the header to go out
+    } catch (const std::exception& e) {
+      impl_->debug(std::string("stream handler threw: ") + e.what());
+      body_->finish({});
+    }
+  }
+
+ public:
+  // Writes what the sink holds, one write at a time; after a finished
+  // sink's last bytes, the end of the body.
+  void pump_stream() {
+    if (!body_ || !stream_started_ || stream_writing_ || body_->closed() || stream_ended_) return;
+    if (body_->waiting() > 0) {
+      stream_writing_ = true;
+      write_stream_bytes(body_->take(), false);
+    } else if (body_->finished()) {
+      stream_writing_ = true;
+      stream_ended_ = true;
+      write_stream_bytes({}, true);
+    }
+  }
+
+ protected:
+  // The stream's write of the header or of bytes completed.
+  void stream_written(error_code ec) {
+    stream_writing_ = false;
+    if (ec) return stream_gone();
+    if (body_) body_->written();
+    if (stream_ended_) return end_stream();
+    pump_stream();
+  }
+  void stream_head_written(error_code ec) {
+    if (ec) return stream_gone();
+    stream_started_ = true;
+    watch_client();
+    pump_stream();
+  }
+  // The client went away (or a write failed): free the sink, tell the route.
+  void stream_gone() {
+    if (body_) body_->close();
+    close_now();
+  }
+
+  using StreamHead = bhttp::response<bhttp::empty_body>;
   virtual void write(BeastResponse&& res) = 0;
+  virtual void write_stream_head(std::unique_ptr<StreamHead> head) = 0;
+  // `bytes` as the body's next piece, or (last) the end of the body.
+  virtual void write_stream_bytes(std::string bytes, bool last) = 0;
+  // Reads (and discards) until the client closes: how a client that went
+  // away is noticed while the body is quiet.
+  virtual void watch_client() = 0;
+  // After the end of the body: close once the client has read it.
+  virtual void end_stream() = 0;
+  virtual void close_now() = 0;
   virtual void upgrade(BeastRequest&& req, bool binary, std::shared_ptr<StreamSource> source) = 0;
 
   std::shared_ptr<HttpServer::Impl> impl_;
@@ -787,7 +920,17 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
   std::shared_ptr<PendingReply> pending_;
   net::steady_timer handler_timer_;
   std::uint64_t id_;
+  // A streamed response (start_stream).
+  std::shared_ptr<StreamBody> body_;
+  bool chunked_ = true;
+  bool stream_started_ = false;  // the header is out
+  bool stream_writing_ = false;
+  bool stream_ended_ = false;    // the end of the body is written or being written
 };
+
+void StreamBody::kick() {
+  if (auto c = conn_.lock()) c->pump_stream();
+}
 
 template <class Stream>
 class HttpSession final : public Connection {
@@ -960,6 +1103,54 @@ class HttpSession final : public Connection {
     });
   }
 
+  void write_stream_head(std::unique_ptr<StreamHead> head) override {
+    stream_head_ = std::move(head);
+    stream_sr_.emplace(*stream_head_);
+    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    bhttp::async_write_header(stream_, *stream_sr_, [self](error_code ec, std::size_t) {
+      // The body takes as long as the route says; a client that does not
+      // read only costs the sink's bound (the route drops beyond it).
+      beast::get_lowest_layer(self->stream_).expires_never();
+      self->stream_head_written(ec);
+    });
+  }
+
+  void write_stream_bytes(std::string bytes, bool last) override {
+    out_ = std::move(bytes);
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    auto done = [self](error_code ec, std::size_t) { self->stream_written(ec); };
+    if (last) {
+      // What is left to send must go out in time; then the close.
+      beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+      if (chunked_) return net::async_write(stream_, bhttp::make_chunk_last(), std::move(done));
+      return net::post(impl_->ioc, [done] { done({}, 0); });
+    }
+    if (chunked_) return net::async_write(stream_, bhttp::make_chunk(net::buffer(out_)), std::move(done));
+    net::async_write(stream_, net::buffer(out_), std::move(done));
+  }
+
+  void watch_client() override {
+    auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
+    stream_.async_read_some(net::buffer(discard_), [self](error_code ec, std::size_t) {
+      if (!ec && !self->ending_) return self->watch_client();  // pipelined bytes: ignored, the connection closes
+      if (self->ending_) return self->close_now();
+      self->stream_gone();
+    });
+  }
+
+  void end_stream() override {
+    // Half-close so the client reads it all; watch_client's read then ends
+    // with the client's close (or the grace time).
+    ending_ = true;
+    out_ = {};
+    beast::get_lowest_layer(stream_).expires_after(kCloseGrace);
+    if constexpr (!std::is_same_v<Stream, TlsStream>) {
+      error_code ignored;
+      stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
+    }
+  }
+
   void upgrade(BeastRequest&& req, bool binary, std::shared_ptr<StreamSource> source) override {
     beast::get_lowest_layer(stream_).expires_never();
     upgraded_ = true;
@@ -990,12 +1181,13 @@ class HttpSession final : public Connection {
     });
   }
 
-  void close_now() {
+  void close_now() override {
     set_idle(false);
     if (upgraded_) return;  // the stream now belongs to the WebSocket session
     error_code ignored;
     beast::get_lowest_layer(stream_).socket().close(ignored);
     handler_timer_.cancel();  // a pending handler's late answer is then a no-op
+    if (body_) body_->close();  // a streamed body's route stops producing
   }
 
   Stream stream_;
@@ -1005,6 +1197,11 @@ class HttpSession final : public Connection {
   BeastResponse res_;
   std::array<char, 4096> discard_{};
   bool upgraded_ = false;
+  // A streamed response: its header and serializer, the bytes being written.
+  std::unique_ptr<StreamHead> stream_head_;
+  std::optional<bhttp::response_serializer<bhttp::empty_body>> stream_sr_;
+  std::string out_;
+  bool ending_ = false;  // the end of the body is written; waiting for the client's close
 };
 
 }  // namespace

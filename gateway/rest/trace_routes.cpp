@@ -113,25 +113,92 @@ std::string utc_stamp(trace::WallTime t) {
   return buf;
 }
 
-Response capture_file(const NetworkTrace& tap, const std::vector<trace::Traced>& frames, bool candump,
-                      const std::string& net) {
+// "canopen-net1-20261124T112857Z.pcapng"
+std::string capture_name(const std::string& net, bool candump) {
+  return "canopen-net" + net + "-" + utc_stamp(std::chrono::system_clock::now()) + (candump ? ".log" : ".pcapng");
+}
+
+Response capture_head(bool candump, const std::string& net) {
   Response r;
   r.status = 200;
-  const auto& iface = tap.settings().interface;
-  std::string name = "canopen-net" + net + "-" + utc_stamp(std::chrono::system_clock::now());
-  if (candump) {
-    r.content_type = "text/plain; charset=utf-8";
-    r.body.reserve(frames.size() * 40);
-    for (const auto& t : frames) r.body += trace::candump_line(t, iface);
-    name += ".log";
-  } else {
-    r.content_type = "application/x-pcapng";
-    r.body = trace::pcapng::file(frames, iface, "canopen-gateway");
-    name += ".pcapng";
-  }
-  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + name + "\"");
+  r.content_type = candump ? "text/plain; charset=utf-8" : "application/x-pcapng";
+  r.headers.emplace_back("Content-Disposition", "attachment; filename=\"" + capture_name(net, candump) + "\"");
   return r;
 }
+
+Response capture_file(const NetworkTrace& tap, const std::vector<trace::Traced>& frames, bool candump,
+                      const std::string& net) {
+  Response r = capture_head(candump, net);
+  const auto& iface = tap.settings().interface;
+  if (candump) {
+    r.body.reserve(frames.size() * 40);
+    for (const auto& t : frames) r.body += trace::candump_line(t, iface);
+  } else {
+    r.body = trace::pcapng::file(frames, iface, "canopen-gateway");
+  }
+  return r;
+}
+
+// The next S seconds, streamed: each frame is written to the response as
+// the tap sees it. A client that does not read fills the response's
+// buffer, then frames are dropped and counted (in pcapng, the closing
+// Interface Statistics Block says how many); one that goes away ends the
+// recording at once.
+class LiveCapture : public std::enable_shared_from_this<LiveCapture> {
+ public:
+  LiveCapture(boost::asio::io_context& io, std::weak_ptr<NetworkTrace> tap, std::shared_ptr<http::BodySink> sink,
+              bool candump)
+      : tap_(std::move(tap)), sink_(std::move(sink)), timer_(io), candump_(candump) {}
+  ~LiveCapture() { stop(); }  // the io_context went first
+  LiveCapture(const LiveCapture&) = delete;
+  LiveCapture& operator=(const LiveCapture&) = delete;
+
+  void start(std::chrono::seconds duration) {
+    auto tap = tap_.lock();
+    if (!tap) return sink_->finish();
+    iface_ = tap->settings().interface;
+    if (!candump_)
+      sink_->write(trace::pcapng::section_header("canopen-gateway") + trace::pcapng::interface_description(iface_));
+    id_ = tap->add_recorder([this](const trace::Traced& t) { on_frame(t); });
+    sink_->on_close = [weak = weak_from_this()] {
+      if (auto self = weak.lock()) self->stop();
+    };
+    timer_.expires_after(duration);
+    timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
+      if (ec) return;  // stopped: the client went away
+      self->stop();
+      std::string tail;
+      if (!self->candump_) {
+        tail = trace::pcapng::interface_statistics(
+            std::chrono::system_clock::now(), self->received_, self->dropped_,
+            self->dropped_ == 0 ? std::string()
+                                : std::to_string(self->dropped_) + " frames dropped: the client did not read fast enough");
+      }
+      self->sink_->finish(tail);
+    });
+  }
+
+ private:
+  void on_frame(const trace::Traced& t) {
+    ++received_;
+    if (!sink_->write(candump_ ? trace::candump_line(t, iface_) : trace::pcapng::enhanced_packet(t))) ++dropped_;
+  }
+  // No more frames (never called from inside the recorder callback).
+  void stop() {
+    timer_.cancel();
+    if (id_ == 0) return;
+    if (auto tap = tap_.lock()) tap->remove(id_);
+    id_ = 0;
+  }
+
+  std::weak_ptr<NetworkTrace> tap_;
+  std::shared_ptr<http::BodySink> sink_;
+  boost::asio::steady_timer timer_;
+  bool candump_;
+  std::string iface_;
+  std::uint64_t id_ = 0;
+  std::uint64_t received_ = 0, dropped_ = 0;
+};
 
 void capture(App& app, const Request& req, Responder respond) {
   Response problem;
@@ -158,35 +225,16 @@ void capture(App& app, const Request& req, Responder respond) {
     const auto frames = tap->ring().since(std::chrono::system_clock::now() - std::chrono::seconds(s));
     return respond(capture_file(*tap, frames, candump, net));
   }
-  // The next S seconds: collected, then sent in one response, so S stays
-  // below the server's handler timeout; bounded by the ring's max-bytes.
-  const auto handler_limit = std::chrono::duration_cast<std::chrono::seconds>(app.config().http.handler_timeout);
-  const auto max_s = static_cast<std::uint32_t>(std::max<std::int64_t>(1, handler_limit.count() - 2));
-  const auto n = query_seconds("seconds", *seconds, max_s, error);
+  const auto n = query_seconds("seconds", *seconds, kMaxCaptureSeconds, error);
   if (!n) return respond(Response::problem(400, error));
-  struct Recording {
-    std::vector<trace::Traced> frames;
-    std::size_t bytes = 0;
-    std::uint64_t id = 0;
-    boost::asio::steady_timer timer;
-    explicit Recording(boost::asio::io_context& io) : timer(io) {}
+  // Answered at once (so no handler timeout applies); the body follows.
+  Response r = capture_head(candump, net);
+  r.stream_buffer_bytes = kCaptureStreamBuffer;
+  r.stream = [&io = app.io(), weak = std::weak_ptr<NetworkTrace>(tap), candump,
+              duration = std::chrono::seconds(*n)](std::shared_ptr<http::BodySink> sink) {
+    std::make_shared<LiveCapture>(io, weak, std::move(sink), candump)->start(duration);
   };
-  auto rec = std::make_shared<Recording>(app.io());
-  const std::size_t max_bytes = tap->ring().limits().max_bytes;
-  rec->id = tap->add_recorder([r = rec.get(), max_bytes](const trace::Traced& t) {
-    const std::size_t cost = trace::CaptureRing::record_bytes(t.frame);
-    if (r->bytes + cost > max_bytes) return;  // full: the capture ends early in content, not in time
-    r->bytes += cost;
-    r->frames.push_back(t);
-  });
-  rec->timer.expires_after(std::chrono::seconds(*n));
-  rec->timer.async_wait([rec, weak = std::weak_ptr<NetworkTrace>(tap), candump, net,
-                         respond = std::move(respond)](const boost::system::error_code&) {
-    auto t = weak.lock();
-    if (!t) return respond(Response::problem(503, "the network went away during the capture"));
-    t->remove(rec->id);
-    respond(capture_file(*t, rec->frames, candump, net));
-  });
+  respond(std::move(r));
 }
 
 }  // namespace

@@ -8,7 +8,8 @@
 //                                       {"lost": N} after frames a slow client lost;
 //                                       at most kMaxTraceClients per network (503)
 //   GET /api/v1/networks/{net}/capture  ?last=S (from the ring) or ?seconds=S (the
-//                                       next S seconds, collected, then sent),
+//                                       next S seconds, streamed as the frames
+//                                       come, up to kMaxCaptureSeconds),
 //                                       &format=pcapng (default) | candump
 //
 // Thread safety: io_context thread, as the server and the App.
@@ -16,6 +17,7 @@
 
 #include <boost/json/object.hpp>
 #include <cstddef>
+#include <cstdint>
 
 #include "app.hpp"
 #include "trace/network_trace.hpp"
@@ -24,6 +26,10 @@
 namespace gateway {
 
 inline constexpr std::size_t kMaxTraceClients = 8;
+// capture?seconds=: the longest live capture, and what of it may wait for a
+// client that does not read before frames are dropped (and counted).
+inline constexpr std::uint32_t kMaxCaptureSeconds = 3600;
+inline constexpr std::size_t kCaptureStreamBuffer = 1u << 20;
 
 // Adds the two routes. `app` MUST outlive the server's use of them; trace
 // sessions that outlive the App find its networks gone and end quietly.

@@ -181,6 +181,27 @@ std::string enhanced_packet(const Traced& t, std::uint32_t interface_id) {
   return block(0x00000006, b);
 }
 
+std::string interface_statistics(WallTime at, std::uint64_t received, std::uint64_t dropped, std::string_view comment,
+                                 std::uint32_t interface_id) {
+  auto u64 = [](std::uint64_t v) {
+    std::string s;
+    u32(s, static_cast<std::uint32_t>(v));
+    u32(s, static_cast<std::uint32_t>(v >> 32));
+    return s;
+  };
+  const auto ns = static_cast<std::uint64_t>(to_ns(at));
+  std::string b;
+  u32(b, interface_id);
+  u32(b, static_cast<std::uint32_t>(ns >> 32));
+  u32(b, static_cast<std::uint32_t>(ns));
+  if (!comment.empty()) option(b, 1, comment);  // opt_comment
+  option(b, 4, u64(received));                  // isb_ifrecv
+  option(b, 5, u64(dropped));                   // isb_ifdrop
+  option(b, 8, u64(received - dropped));        // isb_usrdeliv
+  u32(b, 0);
+  return block(0x00000005, b);
+}
+
 std::string file(const std::vector<Traced>& frames, std::string_view interface, std::string_view application) {
   std::string out = section_header(application) + interface_description(interface);
   out.reserve(out.size() + frames.size() * 108);

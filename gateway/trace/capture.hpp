@@ -91,6 +91,11 @@ inline constexpr std::uint16_t kLinkTypeCanSocketCan = 227;
 std::string section_header(std::string_view application);
 std::string interface_description(std::string_view name);
 std::string enhanced_packet(const Traced& t, std::uint32_t interface_id = 0);
+// An Interface Statistics Block: a capture's closing counts (isb_ifrecv:
+// frames seen, isb_ifdrop: of those dropped, isb_usrdeliv: written; Wireshark
+// shows the drops in the capture file properties) at `at`, with `comment`.
+std::string interface_statistics(WallTime at, std::uint64_t received, std::uint64_t dropped,
+                                 std::string_view comment = {}, std::uint32_t interface_id = 0);
 // SHB + one IDB + the frames.
 std::string file(const std::vector<Traced>& frames, std::string_view interface, std::string_view application);
 }  // namespace pcapng

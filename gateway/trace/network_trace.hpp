@@ -55,6 +55,7 @@ class NetworkTrace {
   std::uint64_t add_recorder(std::function<void(const Traced&)> r);
   void remove(std::uint64_t id);
   std::size_t clients() const { return clients_.size(); }
+  std::size_t recorders() const { return recorders_.size(); }
 
   const CaptureRing& ring() const { return ring_; }
   const BusLoad& load() const { return load_; }

@@ -2,9 +2,10 @@
 """A second, independent pcapng reader (written from the pcapng draft,
 draft-ietf-opsawg-pcapng, and the LINKTYPE_CAN_SOCKETCAN definition) that
 checks a capture the gateway wrote and prints each frame in candump -L form
-plus its direction:
+plus its direction, and an Interface Statistics Block's counts:
 
     (1700000000.123456) vcan0 123#DEADBEEF rx
+    # vcan0: statistics dropped=0 received=42
 
 Exits 1 with a reason on anything that is not well-formed: block lengths,
 byte-order magic, link type, option layout, EPB lengths.
@@ -110,6 +111,19 @@ def main(path):
             sec, frac = divmod(ts, div)
             usec = frac * 1000000 // div
             lines.append("(%010d.%06d) %s %s %s" % (sec, usec, name, can_text(pkt, div), direction))
+        elif btype == 5:
+            iface = struct.unpack_from(endian + "I", body, 0)[0]
+            if iface >= len(interfaces):
+                fail("ISB for undeclared interface %d" % iface)
+            opts = options(body, 12, len(body), endian)
+            count = {}
+            for code, name in ((4, "received"), (5, "dropped")):
+                if code in opts:
+                    if len(opts[code][0]) != 8:
+                        fail("ISB option %d is not 8 bytes" % code)
+                    count[name] = struct.unpack(endian + "Q", opts[code][0])[0]
+            lines.append("# %s: statistics %s" % (interfaces[iface][0], " ".join(
+                "%s=%d" % (k, v) for k, v in sorted(count.items()))))
         off += blen
     print("\n".join(lines))
 

@@ -2,15 +2,22 @@
 // trace and capture"): the trace WebSocket (decoded frames, id filters, a
 // slow client told what it lost while a fast one gets everything), the
 // capture as candump -L lines and as pcapng (read back by
-// tests/tools/pcapng_read.py), bus load in GET /api/v1/networks/{net}.
+// tests/tools/pcapng_read.py), ?seconds= streamed as the frames come, bus
+// load in GET /api/v1/networks/{net}.
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
 #include <boost/asio/connect.hpp>
 #include <boost/asio/ip/tcp.hpp>
+#include <boost/asio/read.hpp>
+#include <boost/asio/read_until.hpp>
+#include <boost/asio/write.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/websocket.hpp>
+#include <algorithm>
+#include <array>
 #include <atomic>
+#include <thread>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -222,42 +229,198 @@ TEST(CaptureRoute, CandumpLinesOfTheLastSeconds) {
   EXPECT_TRUE(device_heartbeat);
 }
 
-// pcapng, read back by the independent reader: every frame with its
-// direction; ?seconds= captures the next seconds.
-TEST(CaptureRoute, PcapngReadBackAndTheNextSeconds) {
-  RestRig rig;
-  ASSERT_TRUE(rig.run_until([&] { return rig.all_operational(); }));
-  const auto started = std::chrono::system_clock::now();
-  const auto r = rig.request("GET", "/api/v1/networks/1/capture?seconds=1");
-  ASSERT_EQ(r.status, 200) << r.body;
-  EXPECT_EQ(r.content_type, "application/x-pcapng");
-  EXPECT_THAT(r.head, HasSubstr(".pcapng\""));
+// The independent reader's view of a pcapng file (tests/tools/pcapng_read.py):
+// one candump -L line plus direction per frame, "# ..." statistics lines.
+std::string read_pcapng(const std::string& bytes) {
   const auto file = std::filesystem::temp_directory_path() / ("capture-" + std::to_string(::getpid()) + ".pcapng");
-  std::ofstream(file, std::ios::binary) << r.body;
+  std::ofstream(file, std::ios::binary) << bytes;
   const std::string cmd = "python3 " CANOPEN_SOURCE_DIR "/tests/tools/pcapng_read.py " + file.string() + " 2>&1";
   FILE* p = ::popen(cmd.c_str(), "r");
-  ASSERT_NE(p, nullptr);
+  EXPECT_NE(p, nullptr);
   std::string out;
   char buf[512];
-  while (std::fgets(buf, sizeof buf, p)) out += buf;
-  EXPECT_EQ(::pclose(p), 0) << out;
+  while (p != nullptr && std::fgets(buf, sizeof buf, p)) out += buf;
+  EXPECT_EQ(p != nullptr ? ::pclose(p) : -1, 0) << out;
   std::filesystem::remove(file);
-  EXPECT_THAT(out, HasSubstr(" rx\n"));
-  EXPECT_THAT(out, HasSubstr(" tx\n"));
-  // Every frame inside the second asked for (whole seconds of the timestamps).
-  const auto first = std::chrono::duration_cast<std::chrono::seconds>(started.time_since_epoch()).count();
+  return out;
+}
+
+// Frame times of the reader's lines, in seconds since the epoch.
+std::vector<double> frame_times(const std::string& out) {
+  std::vector<double> t;
   std::istringstream lines(out);
   std::string line;
-  while (std::getline(lines, line)) {
-    const auto secs = std::stoll(line.substr(1, 10));
-    EXPECT_GE(secs, first);
-    EXPECT_LE(secs, first + 3);
+  while (std::getline(lines, line))
+    if (line.starts_with("(")) t.push_back(std::stod(line.substr(1, 17)));
+  return t;
+}
+
+// A plain socket on its own thread: sends one GET, tells when the body's
+// first bytes are in, then reads to the close.
+struct StreamingGet {
+  StreamingGet(std::uint16_t port, const std::string& target, int rcvbuf = 0) : sock(io) {
+    sock.open(tcp::v4());
+    if (rcvbuf > 0) sock.set_option(boost::asio::socket_base::receive_buffer_size(rcvbuf));
+    sock.connect({boost::asio::ip::make_address("127.0.0.1"), port});
+    boost::asio::write(sock, boost::asio::buffer("GET " + target + " HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n"));
   }
+  // The header and at least `body_bytes` more.
+  void read_head(std::size_t body_bytes) {
+    boost::system::error_code ec;
+    boost::asio::read_until(sock, boost::asio::dynamic_buffer(raw), "\r\n\r\n", ec);
+    while (!ec && raw.size() < raw.find("\r\n\r\n") + 4 + body_bytes) {
+      const auto n = sock.read_some(boost::asio::buffer(tmp), ec);
+      raw.append(tmp.data(), n);
+    }
+  }
+  HttpReply finish() {
+    boost::system::error_code ec;
+    boost::asio::read(sock, boost::asio::dynamic_buffer(raw), ec);
+    HttpReply r;
+    const auto head_end = raw.find("\r\n\r\n");
+    r.status = std::stoi(raw.substr(9, 3));
+    r.head = raw.substr(0, head_end);
+    for (char& c : r.head) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    std::size_t pos = head_end + 4;  // de-chunk
+    for (;;) {
+      const auto eol = raw.find("\r\n", pos);
+      if (eol == std::string::npos) break;
+      const auto n = std::stoul(raw.substr(pos, eol - pos), nullptr, 16);
+      if (n == 0) {
+        complete = true;
+        break;
+      }
+      r.body += raw.substr(eol + 2, n);
+      pos = eol + 2 + n + 2;
+    }
+    return r;
+  }
+  boost::asio::io_context io;
+  tcp::socket sock;
+  std::string raw;
+  std::array<char, 4096> tmp{};
+  bool complete = false;
+};
+
+// ?seconds=S is streamed (contract "Bus trace and capture"): the header
+// and the pcapng's section header and interface block arrive at once, each
+// frame as the bus carries it, so a frame put on the bus after the first
+// bytes were read is in the file; the file covers the whole period and
+// ends with the interface statistics (nothing dropped).
+TEST(CaptureRoute, SecondsIsStreamedAsTheFramesCome) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.all_operational(); }));
+  auto tap = rig.app->frame_tap(1);
+  ASSERT_TRUE(tap);
+  const auto started = std::chrono::duration<double>(std::chrono::system_clock::now().time_since_epoch()).count();
+  std::atomic<bool> first_bytes{false};
+  auto client = std::async(std::launch::async, [&] {
+    StreamingGet get(rig.port, "/api/v1/networks/1/capture?seconds=2");
+    get.read_head(28);  // a pcapng section header block is 28 bytes and more
+    first_bytes = true;
+    auto r = get.finish();
+    return std::make_pair(r, get.complete);
+  });
+  ASSERT_TRUE(rig.run_until([&] { return first_bytes.load(); }, 5s));
+  // A marker no demo device sends (123h), after the client had its first bytes.
+  auto marker = canopen::can::Frame::standard(0x123, {});
+  marker.len = 2;
+  marker.data[0] = 0xCA;
+  marker.data[1] = 0xFE;
+  tap->sent(marker, std::chrono::steady_clock::now(), std::chrono::system_clock::now());
+  ASSERT_TRUE(rig.run_until([&] { return client.wait_for(0s) == std::future_status::ready; }, 10s));
+  const auto [r, complete] = client.get();
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_TRUE(r.has_header("content-type: application/x-pcapng")) << r.head;
+  EXPECT_TRUE(r.has_header("transfer-encoding: chunked")) << r.head;
+  EXPECT_THAT(r.head, HasSubstr(".pcapng\""));
+  EXPECT_TRUE(complete) << "the last chunk ends the body";
+  const auto out = read_pcapng(r.body);
+  EXPECT_THAT(out, HasSubstr(" 123#CAFE tx\n")) << "the frame sent after the first bytes is in the file";
+  EXPECT_THAT(out, HasSubstr(" rx\n"));
+  EXPECT_THAT(out, HasSubstr("# demo1: statistics dropped=0 received="));
+  const auto times = frame_times(out);
+  ASSERT_FALSE(times.empty());
+  // All inside the capture, from its start to its end (the demo's
+  // heartbeats and PDOs keep the bus busy all along).
+  EXPECT_GE(*std::min_element(times.begin(), times.end()), started);
+  EXPECT_LE(*std::min_element(times.begin(), times.end()), started + 0.9);
+  EXPECT_GE(*std::max_element(times.begin(), times.end()), started + 1.1);
+  EXPECT_LE(*std::max_element(times.begin(), times.end()), started + 4);
+}
+
+// The same as candump -L lines; a client that disconnects ends the
+// recording (no recorder left on the tap).
+TEST(CaptureRoute, SecondsAsCandumpAndADisconnectEndsIt) {
+  RestRig rig;
+  ASSERT_TRUE(rig.run_until([&] { return rig.all_operational(); }));
+  const auto r = rig.request("GET", "/api/v1/networks/1/capture?seconds=1&format=candump");
+  ASSERT_EQ(r.status, 200) << r.body;
+  EXPECT_THAT(r.content_type, HasSubstr("text/plain"));
+  EXPECT_THAT(r.head, HasSubstr(".log\""));
+  std::istringstream lines(r.body);
+  std::string line;
+  int n = 0;
+  while (std::getline(lines, line)) {
+    ++n;
+    EXPECT_TRUE(std::regex_match(line, std::regex(R"(\(\d{10}\.\d{6}\) demo1 [0-9A-F]{3}#([0-9A-F]{2})*)"))) << line;
+  }
+  EXPECT_GT(n, 5);
+
+  auto tap = rig.app->frame_tap(1);
+  const auto before = tap->recorders();
+  auto client = std::async(std::launch::async, [&] {
+    StreamingGet get(rig.port, "/api/v1/networks/1/capture?seconds=3600");
+    get.read_head(28);
+    return 0;  // closes the socket
+  });
+  ASSERT_TRUE(rig.run_until([&] { return client.wait_for(0s) == std::future_status::ready; }, 5s));
+  EXPECT_TRUE(rig.run_until([&] { return tap->recorders() == before; }, 5s))
+      << "the hour-long capture still records after its client left";
+}
+
+// A client that does not read: the gateway buffers a bounded amount, then
+// drops frames and counts them; the bus path never waits, and the file
+// says how many were dropped (pcapng Interface Statistics Block).
+TEST(CaptureRoute, SlowClientLosesFramesCountedInTheFile) {
+  RestRig rig;
+  auto tap = rig.app->frame_tap(1);
+  ASSERT_TRUE(tap);
+  std::atomic<bool> go{false}, first_bytes{false};
+  auto client = std::async(std::launch::async, [&] {
+    StreamingGet get(rig.port, "/api/v1/networks/1/capture?seconds=2", 4096);
+    get.read_head(28);
+    first_bytes = true;
+    while (!go) std::this_thread::sleep_for(10ms);  // does not read meanwhile
+    return get.finish();
+  });
+  ASSERT_TRUE(rig.run_until([&] { return first_bytes.load(); }, 5s));
+  auto f = canopen::can::Frame::standard(0x123, {});
+  f.len = 8;
+  constexpr std::uint32_t kFrames = 100000;  // 64-byte pcapng blocks: 6.4 MB, beyond the 1 MiB bound and the sockets
+  for (std::uint32_t i = 0; i < kFrames; i += 1000) {
+    for (std::uint32_t k = i; k < i + 1000; ++k)
+      tap->sent(f, std::chrono::steady_clock::now(), std::chrono::system_clock::now());
+    rig.io.poll();
+  }
+  go = true;
+  ASSERT_TRUE(rig.run_until([&] { return client.wait_for(0s) == std::future_status::ready; }, 15s));
+  const auto r = client.get();
+  const auto out = read_pcapng(r.body);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(out, m, std::regex(R"(# demo1: statistics dropped=(\d+) received=(\d+))"))) << out;
+  const auto dropped = std::stoull(m[1]);
+  const auto received = std::stoull(m[2]);
+  std::uint64_t markers = 0;
+  for (std::size_t p = out.find(" 123#"); p != std::string::npos; p = out.find(" 123#", p + 1)) ++markers;
+  EXPECT_GT(dropped, 0u);
+  EXPECT_GT(markers, 0u);
+  EXPECT_EQ(frame_times(out).size(), received - dropped) << "every frame not counted as dropped is in the file";
 }
 
 TEST(CaptureRoute, BadQueriesAre400UnknownNetwork404) {
   RestRig rig;
-  for (const char* q : {"?format=xml", "?last=0", "?last=x", "?last=5&seconds=1", "?seconds=3600"}) {
+  for (const char* q : {"?format=xml", "?last=0", "?last=x", "?last=5&seconds=1", "?seconds=0", "?seconds=3601"}) {
     const auto r = rig.request("GET", std::string("/api/v1/networks/1/capture") + q);
     EXPECT_EQ(r.status, 400) << q << " " << r.body;
     EXPECT_EQ(r.content_type, "application/problem+json");
