@@ -82,7 +82,8 @@ TEST(HistoryRoute, AnalogInputsOfTheDemoIoModuleAsSeriesWithAscendingTimes) {
 
   // Chosen objects only, in the tier the window asks for; one without
   // history is simply absent.
-  const auto two = get_json(rig, kNode10 + "/history?window=3600&objects=6401:02,2000:00");
+  // (percent-encoded, as a browser's URLSearchParams writes it)
+  const auto two = get_json(rig, kNode10 + "/history?window=3600&objects=6401%3A02%2C2000%3A00");
   EXPECT_EQ(two.at("resolution").to_number<int>(), 10);
   ASSERT_EQ(two.at("series").as_array().size(), 1U) << json::serialize(two);
   EXPECT_EQ(two.at("series").as_array()[0].as_object().at("object").as_string(), "6401:02");
