@@ -8,6 +8,8 @@
 #include <gtest/gtest.h>
 #include <gmock/gmock.h>
 
+#include <filesystem>
+
 #include "history_routes.hpp"
 #include "rest_rig.hpp"
 
@@ -143,6 +145,27 @@ TEST(HistoryRoute, NmtStopEndsTheSeriesWithAGapAndTheRestartContinuesIt) {
   ASSERT_GT(after.size(), before);
   EXPECT_TRUE(after[before - 1].is_null()) << json::serialize(*s);
   EXPECT_FALSE(after.back().is_null());
+}
+
+// Contract "Remote configuration and maintenance": a node's settings
+// changed at run time may be another device or mapping, so its old values
+// are dropped; what comes after is recorded afresh.
+TEST(HistoryRoute, ANodeConfiguredAnewAtRunTimeStartsItsHistoryAfresh) {
+  const auto dir = std::filesystem::temp_directory_path() / ("rest_history_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    RestRig rig({}, [&](Config& c) { c.state_dir = dir.string(); });
+    ASSERT_TRUE(rig.run_until([&] { return points(rig) >= 3; }, 20s));
+    const auto before = std::chrono::floor<std::chrono::seconds>(std::chrono::system_clock::now());
+    const auto put = rig.request("PUT", kNode10 + "/config", R"x({"name": "io-left", "eds": "(built in)"})x");
+    ASSERT_EQ(put.status, 200) << put.body;
+    const auto r = rig.app->value_history()->query(1, 10, {}, 600, std::chrono::system_clock::now());
+    for (const auto& s : r.series) {
+      ASSERT_FALSE(s.points.empty());
+      EXPECT_GE(s.points.front().t, before.time_since_epoch().count()) << "a bucket from before the change survived";
+    }
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(HistoryRoute, HistoryOffIs404) {
