@@ -57,6 +57,8 @@ TEST(HistoryRoute, AnalogInputsOfTheDemoIoModuleAsSeriesWithAscendingTimes) {
     EXPECT_EQ(s->at("sub").to_number<int>(), sub);
     EXPECT_EQ(s->at("name").as_string(), "Analogue input " + std::to_string(sub));  // the EDS's [6401Name]
     EXPECT_EQ(s->at("type").as_string(), "INTEGER16");
+    EXPECT_EQ(s->at("unit").as_string(), "mV");  // Unit=mV in the I/O module's EDS
+    EXPECT_TRUE(s->at("factor").is_null());       // no Factor=: the values are in mV as they are
     const auto& t = s->at("t").as_array();
     const auto& mean = s->at("mean").as_array();
     const auto& min = s->at("min").as_array();
