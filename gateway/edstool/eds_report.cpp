@@ -61,11 +61,11 @@ json::object dictionary_json(const canopen::eds::DeviceDescription& d) {
   o["vendorName"] = d.device.vendor_name;
   o["productName"] = d.device.product_name;
   o["dcf"] = d.is_dcf;
-  o["objects"] = objects_json(d.od);
+  o["objects"] = objects_json(d.od, &d);
   return o;
 }
 
-json::array objects_json(const canopen::od::ObjectDictionary& od) {
+json::array objects_json(const canopen::od::ObjectDictionary& od, const canopen::eds::DeviceDescription* facts) {
   json::array objects;
   for (const auto& [index, obj] : od.objects()) {
     json::object jo;
@@ -84,6 +84,10 @@ json::array objects_json(const canopen::od::ObjectDictionary& od) {
       js["default"] = optional_value(e.default_value);
       js["low"] = optional_value(e.low);
       js["high"] = optional_value(e.high);
+      // Unit and factor as the file gives them (null: show the raw value).
+      const auto f = facts != nullptr ? facts->facts(index, sub) : canopen::eds::EntryFacts{};
+      js["unit"] = f.unit.empty() ? json::value(nullptr) : json::value(f.unit);
+      js["factor"] = f.factor ? json::value(*f.factor) : json::value(nullptr);
       subs.push_back(std::move(js));
     }
     jo["subs"] = std::move(subs);

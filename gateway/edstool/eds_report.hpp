@@ -45,9 +45,12 @@ std::string error_line(const canopen::eds::EdsError& e);
 
 // {"vendorName", "productName", "dcf", "objects": [{"index", "indexHex",
 // "name", "objectCode", "subs": [{"subIndex", "name", "type", "access",
-// "pdoMappable", "default", "low", "high"}]}]}
+// "pdoMappable", "default", "low", "high", "unit", "factor"}]}]}; unit and
+// factor are null where the file gives none (value in unit = raw x factor).
 boost::json::object dictionary_json(const canopen::eds::DeviceDescription& d);
-// The "objects" array of dictionary_json() for `od`, in index order.
-boost::json::array objects_json(const canopen::od::ObjectDictionary& od);
+// The "objects" array of dictionary_json() for `od`, in index order; units
+// and factors from `facts` (the file `od` was read from), null without one.
+boost::json::array objects_json(const canopen::od::ObjectDictionary& od,
+                                const canopen::eds::DeviceDescription* facts = nullptr);
 
 }  // namespace gateway::edstool

@@ -5,11 +5,15 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <charconv>
+#include <cmath>
 #include <fstream>
 #include <limits>
 #include <set>
 #include <span>
 #include <sstream>
+#include <tuple>
+#include <utility>
 
 #include "ini.hpp"
 
@@ -109,6 +113,71 @@ struct SkipObject {
 };
 
 // ---------------------------------------------------------------------------
+// Units. CiA 306 has no key for a physical unit; vendor files write one in
+// these ways, and the reader understands them (an explicit key wins over
+// the name):
+//  - `Unit=mV` with `Factor=0.1` (python-canopen's files; `PhysicalUnit=`
+//    is read like `Unit=`): value in mV = raw x 0.1;
+//  - `Unit=0.01A per unit` (Curtis/Sevcon files): the number is the factor;
+//  - a unit in square brackets ending ParameterName ("Voltage UB Power
+//    [mV]"): a short token only (no spaces, at most 8 characters, not an
+//    array index like "LmTable[9]", no '?' left by a lost 'µ');
+//  - in parentheses only a symbol from kUnitSymbols, because vendors put
+//    words there ("(manufacturer specific)", "(tx)").
+
+constexpr std::array<std::string_view, 22> kUnitSymbols = {
+    "Hz", "kHz", "V", "mV", "A", "mA", "W", "kW", "\u00B0C", "degC", "K", "rpm", "%", "ms", "s", "mm", "m", "bar", "mbar",
+    "Pa", "kPa", "Nm"};
+
+std::size_t code_points(std::string_view s) {
+  return static_cast<std::size_t>(std::count_if(s.begin(), s.end(), [](char c) {
+    return (static_cast<unsigned char>(c) & 0xC0) != 0x80;  // not a UTF-8 continuation byte
+  }));
+}
+
+// "[mV]" / "(Hz)" at the end of a ParameterName; empty if none.
+std::string unit_from_name(std::string_view name) {
+  name = trim(name);
+  if (name.size() < 3) return {};
+  const char close = name.back();
+  const char open = close == ']' ? '[' : close == ')' ? '(' : '\0';
+  if (open == '\0') return {};
+  const auto pos = name.rfind(open);
+  if (pos == std::string_view::npos) return {};
+  const auto token = name.substr(pos + 1, name.size() - pos - 2);
+  if (open == '(') {
+    return std::find(kUnitSymbols.begin(), kUnitSymbols.end(), token) != kUnitSymbols.end() ? std::string(token)
+                                                                                          : std::string{};
+  }
+  if (token.empty() || code_points(token) > 8 || all_dec(token)) return {};
+  if (token.find_first_of(" \t?[(") != std::string_view::npos) return {};
+  return std::string(token);
+}
+
+// A finite, non-zero number, the whole text; nullopt otherwise.
+std::optional<double> factor_number(std::string_view text) {
+  text = trim(text);
+  double v = 0;
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+  if (ec != std::errc{} || end != text.data() + text.size() || !std::isfinite(v) || v == 0) return std::nullopt;
+  return v;
+}
+
+// "0.01A per unit" -> factor 0.01, unit "A"; any other text is the unit as written.
+std::pair<std::string, std::optional<double>> split_unit(std::string_view text) {
+  text = trim(text);
+  static constexpr std::string_view kPerUnit = " per unit";
+  if (text.size() > kPerUnit.size() && to_lower(text.substr(text.size() - kPerUnit.size())) == kPerUnit) {
+    const auto head = trim(text.substr(0, text.size() - kPerUnit.size()));
+    double v = 0;
+    const auto [end, ec] = std::from_chars(head.data(), head.data() + head.size(), v);
+    const auto unit = trim(head.substr(static_cast<std::size_t>(end - head.data())));
+    if (ec == std::errc{} && std::isfinite(v) && v != 0 && !unit.empty()) return {std::string(unit), v};
+  }
+  return {std::string(text), std::nullopt};
+}
+
+// ---------------------------------------------------------------------------
 // Section kinds derived from the name.
 
 enum class ObjKind { Object, Sub, Name, Value, Denotation, ObjectLinks };
@@ -184,15 +253,18 @@ struct Template {
   std::optional<Value> low, high;
   Parsed def, param;
   std::uint32_t obj_flags = 0;
+  std::string unit;  // from Unit= / PhysicalUnit=; empty: taken from the entry's name, if any
+  std::optional<double> factor;
 };
 
-constexpr std::array<std::string_view, 15> kObjectKeys = {
-    "parametername", "objecttype",     "datatype",   "accesstype", "defaultvalue",
-    "pdomapping",    "subnumber",      "lowlimit",   "highlimit",  "objflags",
-    "compactsubobj", "parametervalue", "denotation", "uploadfile", "downloadfile"};
-constexpr std::array<std::string_view, 13> kSubKeys = {
-    "parametername", "objecttype", "datatype",       "accesstype", "defaultvalue", "pdomapping",  "lowlimit",
-    "highlimit",     "objflags",   "parametervalue", "denotation", "uploadfile",   "downloadfile"};
+constexpr std::array<std::string_view, 18> kObjectKeys = {
+    "parametername", "objecttype",     "datatype",   "accesstype", "defaultvalue", "pdomapping",
+    "subnumber",     "lowlimit",       "highlimit",  "objflags",   "compactsubobj", "parametervalue",
+    "denotation",    "uploadfile",     "downloadfile", "unit",     "physicalunit", "factor"};
+constexpr std::array<std::string_view, 16> kSubKeys = {
+    "parametername", "objecttype", "datatype",       "accesstype", "defaultvalue", "pdomapping",
+    "lowlimit",      "highlimit",  "objflags",       "parametervalue", "denotation", "uploadfile",
+    "downloadfile",  "unit",       "physicalunit",   "factor"};
 
 // ---------------------------------------------------------------------------
 
@@ -237,6 +309,7 @@ class Builder {
   void read_object(std::uint16_t index, const ObjSections& secs);
   Template read_template(const IniSection& s, bool domain_defaults);
   std::uint32_t obj_flags(const IniSection& s);
+  void read_unit(const IniSection& s, Template& t);
   od::SubEntry finish(const Template& t, std::uint8_t sub, const Parsed* override_value);
   void check_in_limits(const Template& t, const Parsed& p) const;
   // [xxxxName] / [xxxxValue]: numbered entries 1..count.
@@ -727,6 +800,23 @@ std::uint32_t Builder::obj_flags(const IniSection& s) {
   return static_cast<std::uint32_t>(std::get<std::uint64_t>(v->data));
 }
 
+// Unit= (else PhysicalUnit=) and Factor= of one section; a Factor that is
+// no number is ignored with a warning (the unit stays, without a factor).
+void Builder::read_unit(const IniSection& s, Template& t) {
+  const auto* unit = s.find("unit");
+  if (unit == nullptr || unit->value.empty()) unit = s.find("physicalunit");
+  if (unit != nullptr && !unit->value.empty()) std::tie(t.unit, t.factor) = split_unit(unit->value);
+  const auto* factor = s.find("factor");
+  if (factor == nullptr || factor->value.empty()) return;
+  const auto bare = std::string_view(factor->value).substr(0, factor->value.find_first_of(";#"));
+  if (const auto v = factor_number(bare)) {
+    t.factor = v;  // the Factor key wins over a "0.01A per unit" number
+  } else {
+    d_.warn(factor->line, "Factor '" + factor->value + "' in " + subject(s) +
+                              " is not a non-zero number; ignored (values are shown without a factor)");
+  }
+}
+
 Template Builder::read_template(const IniSection& s, bool domain_defaults) {
   Template t;
   const auto* name = s.find("parametername");
@@ -798,6 +888,7 @@ Template Builder::read_template(const IniSection& s, bool domain_defaults) {
   }
 
   t.obj_flags = obj_flags(s);
+  read_unit(s, t);
   t.def = parse_object_value(s.find("defaultvalue"), t.type);
   t.param = parse_object_value(s.find("parametervalue"), t.type);
   check_in_limits(t, t.def);
@@ -826,6 +917,8 @@ od::SubEntry Builder::finish(const Template& t, std::uint8_t sub, const Parsed* 
     const std::string lower = to_lower(t.def.entry->value);
     facts.hex_default = lower.find("0x") != std::string::npos;
   }
+  facts.unit = t.unit.empty() ? unit_from_name(e.name) : t.unit;
+  facts.factor = t.factor;
   // The most specific value wins: [xxxxValue] entry, ParameterValue, DefaultValue.
   const Parsed* chosen = nullptr;
   for (const Parsed* p : {override_value, &t.param, &t.def}) {

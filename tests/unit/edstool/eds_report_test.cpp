@@ -101,6 +101,36 @@ TEST(EdsShow, DictionaryJsonHasTheShapeOfTheOdRoute) {
   EXPECT_EQ(sub.at("default").to_number<std::int64_t>(), 0);
 }
 
+// GET .../od and `canopen-eds show` give each sub-entry its unit and factor
+// from the file (null where it gives none, so clients show the raw value).
+TEST(EdsShow, SubEntriesCarryUnitAndFactorFromTheFile) {
+  const auto d = canopen::eds::parse_device_description(
+      "[FileInfo]\n[DeviceInfo]\n[MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n"
+      "[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\nDefaultValue=0\n"
+      "[OptionalObjects]\nSupportedObjects=1\n1=0x2000\n"
+      "[2000]\nParameterName=Analog input\nObjectType=0x7\nDataType=0x0003\nAccessType=ro\nUnit=mV\nFactor=0.1\n",
+      "units.eds");
+  const auto objects = objects_json(d.od, &d);
+  ASSERT_EQ(objects.size(), 2u);
+  const auto& plain = objects.at(0).at("subs").as_array().at(0).as_object();
+  EXPECT_TRUE(plain.at("unit").is_null());
+  EXPECT_TRUE(plain.at("factor").is_null());
+  const auto& analog = objects.at(1).at("subs").as_array().at(0).as_object();
+  EXPECT_EQ(analog.at("unit").as_string(), "mV");
+  EXPECT_DOUBLE_EQ(analog.at("factor").as_double(), 0.1);
+  // A dictionary without a file (the gateway's own node): no units.
+  EXPECT_TRUE(objects_json(d.od).at(1).at("subs").as_array().at(0).at("unit").is_null());
+  // The example drive: the velocity the demo TPDO carries is in rpm.
+  const auto drive = dictionary_json(canopen::eds::load_device_description(kDrive, 5));
+  bool found = false;
+  for (const auto& o : drive.at("objects").as_array()) {
+    if (o.at("index").to_number<std::int64_t>() != 0x606C) continue;
+    found = true;
+    EXPECT_EQ(o.at("subs").as_array().at(0).at("unit").as_string(), "rpm");
+  }
+  EXPECT_TRUE(found);
+}
+
 // The installed command: exit codes and output as the contract says.
 struct Run {
   int status;

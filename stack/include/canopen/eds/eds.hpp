@@ -127,9 +127,15 @@ struct EntryFacts {
   bool parameter_value = false;  // a ParameterValue or [xxxxValue] entry gave the value
   bool hex_default = false;      // DefaultValue was written in hex (0x...)
   // The physical unit and scale vendors write into their files (no CiA 306
-  // key exists; see the reader for the conventions it understands): the
-  // value in `unit` is the raw value times `factor`. Empty / nullopt when the
-  // file says nothing, and then values are shown raw.
+  // key exists): the value in `unit` is the raw value times `factor`. Read
+  // from the entry's own section (a sub-object inherits nothing from its
+  // object section; CompactSubObj entries take the object section's):
+  // `Unit=mV` / `PhysicalUnit=mV` with `Factor=0.1`; `Unit=0.01A per unit`
+  // (factor 0.01, unit "A"); else a short unit in brackets ending the name
+  // ("Voltage [mV]"), or in parentheses if it is a common unit symbol
+  // ("Frequency (Hz)"). A Factor that is not a non-zero number is ignored
+  // with a warning. Empty / nullopt when the file says nothing, and then
+  // values are shown raw; a factor may come without a unit.
   std::string unit;
   std::optional<double> factor;
 };
