@@ -282,7 +282,7 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
     const s = [{}, { label: 'mean', stroke, width: 1.5, spanGaps: false, points: { show: false } }];
     const opts = {
       width: Math.max(160, holder.clientWidth), height: CHART_HEIGHT, class: 'chart-plot',
-      cursor: { drag: { x: false, y: false } }, legend: { show: false }, select: { show: false },
+      cursor: { show: false }, legend: { show: false }, select: { show: false },
       scales: {
         x: { time: true },
         // 8% headroom so extremes and flat lines stay visible inside the box.
@@ -433,6 +433,9 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
     net = network;
     if (n === node) return;
     destroy();
+    // Only the selected node keeps the gateway's buckets (up to 1440 per
+    // object); another node's are fetched again when it is selected.
+    for (const ser of series.values()) ser.server = null;
     node = n;
     renderSelector();
     fetchHistory();
