@@ -736,7 +736,7 @@ function selectNode(id) {
   $('#node-empty').hidden = true;
   $('#node-detail').hidden = false;
   $('#panel-node').dataset.node = id;
-  charts.select(id, state.net);
+  charts.select(id, state.net, !!state.nodes.get(id)?.own);
   state.dirty.nodes = state.dirty.values = state.dirty.valueLayout = state.dirty.emcy = true;
   renderOd(id);
   renderConfig(id);

@@ -72,6 +72,7 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
   let status = { state: 'idle', text: '' };
   let generation = 0;
   let fetchedAt = 0;
+  let skipHistory = false;    // the selected node sends no process data
 
   const now = () => Date.now() / 1000 + offset;
   const sk = (n, key) => `${n}/${key}`;
@@ -158,7 +159,7 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
   // ------------------------------------------------------------ server history
 
   async function fetchHistory() {
-    if (node === null) return;
+    if (node === null || skipHistory) return;
     const gen = ++generation;
     const n = node, w = windowS;
     status = { state: 'loading', text: 'loading history…' };
@@ -429,7 +430,9 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
     fetchHistory();
   }
 
-  function select(n, network) {
+  // noHistory: the node sends no process data (the gateway's own node), so
+  // there is nothing to ask the gateway for.
+  function select(n, network, noHistory = false) {
     net = network;
     if (n === node) return;
     destroy();
@@ -438,6 +441,9 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
     for (const ser of series.values()) ser.server = null;
     node = n;
     renderSelector();
+    status = { state: 'idle', text: '' };
+    generation++;
+    skipHistory = noHistory;
     fetchHistory();
   }
 
@@ -452,7 +458,7 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
   // Called from the render tick: the status line, and a refetch now and then.
   function tick() {
     renderStatus();
-    if (node !== null && fetchedAt && Date.now() - fetchedAt > REFETCH_S * 1000 && status.state !== 'loading') {
+    if (node !== null && fetchedAt && status.state !== 'idle' && Date.now() - fetchedAt > REFETCH_S * 1000 && status.state !== 'loading') {
       fetchedAt = Date.now();
       fetchHistory();
     }
