@@ -13,6 +13,7 @@
 #include "canopen/socketcan/service_driver.hpp"
 #include "composition.hpp"
 #include "core/core_metrics.hpp"
+#include "history/history_metrics.hpp"
 #include "core/format.hpp"
 #include "event_encoder.hpp"
 #include "mqtt_output.hpp"
@@ -304,6 +305,7 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
             return encode_event(ev, network, encode_ctx_);
           },
           cache_),
+      history_(config_.history.max_bytes),
       monitor_(std::move(networks.monitor)),
       nets_(std::move(networks.units)) {
   core_.set_node_settings(node_configs_.get());
@@ -371,6 +373,7 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
         SparkplugOutput::Options{config_.sparkplug.aliases, config_.sparkplug.commands_role}, log_);
     sparkplug_->on_command = [o = sparkplug_out_.get()](sparkplug::WriteCommand cmd) { o->on_command(cmd); };
   }
+  history::register_metrics(metrics_, history_);  // issue 18: the PDO value history's bytes and objects
 }
 
 App::App(boost::asio::io_context& io, Config config, Logger& log)
@@ -578,6 +581,7 @@ void App::on_stack_event(Net& n, const canopen::Event& ev) {
     log_.warn(n.label + ": cannot store the event sequence in " + n.seq->file().string() + ": " + ec.message() +
               " (numbers may repeat after a crash)");
   pipeline_.on_event(n.number, ev);
+  history_.on_event(n.number, ev);  // TPDO values and node breaks for the charts
 }
 
 void App::log_event(const Net& n, const canopen::Event& ev) {

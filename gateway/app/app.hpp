@@ -31,6 +31,7 @@
 #include "core/request_core.hpp"
 #include "event_encoder.hpp"
 #include "event_message.hpp"
+#include "history/value_history.hpp"
 #include "log.hpp"
 #include "pipeline.hpp"
 #include "registry.hpp"
@@ -146,6 +147,9 @@ class App {
   // ring, bus load); null for an unknown network. Holders that may outlive
   // the App (WebSocket sessions) keep it as a weak_ptr.
   std::shared_ptr<trace::NetworkTrace> frame_tap(std::uint32_t net);
+  // The TPDO value history (issue 18, GET .../nodes/{node}/history); nullptr
+  // when history.max-bytes is 0.
+  const history::ValueHistory* value_history() const { return config_.history.max_bytes ? &history_ : nullptr; }
   // The io_context everything runs on (timers of request handlers).
   boost::asio::io_context& io() { return io_; }
   // Frame counters of network `net`'s channel (for /metrics).
@@ -230,6 +234,7 @@ class App {
   std::function<bool()> protobuf_demand_;
   StateCache cache_;
   EventPipeline pipeline_;
+  history::ValueHistory history_;  // fed by on_stack_event
   std::shared_ptr<canopen::socketcan::LinkMonitor> monitor_;  // interface up/down, shared by networks
   std::vector<std::unique_ptr<Net>> nets_;
   std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();

@@ -120,6 +120,7 @@ void App::NodeConfigs::apply(std::uint32_t net, const NodeConfig& node,
   NetworkUnit& unit = *app.nets_[net - 1];
   const bool described = description.has_value();
   unit.apply_node(node, std::move(description));
+  app.history_.forget_node(net, node.id);  // another device or mapping: its old values are not this one's
   app.cache_.add_configured_node(net, node.id, node.name);
   if (app.sparkplug_out_) app.sparkplug_out_->node_changed(net, node.id, node.sparkplug_metrics);
   app.log_.info(unit.label + " node " + std::to_string(node.id) + ": settings applied at run time (" +
@@ -149,6 +150,7 @@ core::Result App::NodeConfigs::revert_node_config(std::uint32_t net, std::uint8_
     apply(net, *file, std::move(desc));
   } else {
     unit.remove_node(node);
+    app.history_.forget_node(net, node);
     app.cache_.unconfigure_node(net, node);
     if (app.sparkplug_out_) app.sparkplug_out_->node_changed(net, node, {});
     app.log_.info(unit.label + " node " + std::to_string(node) + ": run-time settings dropped; not configured");

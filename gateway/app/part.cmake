@@ -10,6 +10,6 @@ add_library(gateway_app STATIC ${CMAKE_CURRENT_LIST_DIR}/app.cpp ${CMAKE_CURRENT
 target_include_directories(gateway_app PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_compile_definitions(gateway_app PRIVATE CANOPEN_GATEWAY_VERSION="${PROJECT_VERSION}")
 target_link_libraries(gateway_app PUBLIC gateway_config gateway_auth gateway_core gateway_pipeline gateway_messages gateway_mqtt gateway_sim gateway_sparkplug
-                                         gateway_sparkplug_client gateway_trace
+                                         gateway_sparkplug_client gateway_trace gateway_history
                                          canopen_device canopen_local_node canopen_network canopen_socketcan canopen_eds
                                   PRIVATE canopen_options)

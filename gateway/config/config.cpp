@@ -583,7 +583,7 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   const std::string dir = file.empty() ? std::string() : fs::path(file).parent_path().string();
   At top(root, "", file);
   if (top.is_null()) return c;
-  top.expect_map({"gateway", "networks", "mqtt", "http", "sparkplug", "ascii"});
+  top.expect_map({"gateway", "networks", "mqtt", "http", "sparkplug", "ascii", "history"});
   std::uint8_t default_node_id = 127;
   if (auto g = top.get("gateway")) {
     g->expect_map({"id", "node-id", "log-level", "state-dir"});
@@ -601,6 +601,17 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
     if (auto v = g->get("state-dir")) {
       c.state_dir = resolve(dir, v->str());
       c.state_dir_origin = v->where();
+    }
+  }
+  if (auto h = top.get("history")) {
+    h->expect_map({"max-bytes"});
+    if (auto v = h->get("max-bytes")) {
+      // One object takes about 38 KiB (value_history.hpp): below 1 MiB the
+      // history would hold too few objects to be of use; 0 turns it off.
+      c.history.max_bytes = v->integer(0, std::uint64_t{16} << 30);
+      if (c.history.max_bytes != 0 && c.history.max_bytes < (std::uint64_t{1} << 20))
+        v->fail("must be 0 (no history) or 1048576 (1 MiB) .. 17179869184 (16 GiB), not " +
+                std::to_string(c.history.max_bytes));
     }
   }
   if (auto n = top.get("networks")) {

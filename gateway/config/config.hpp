@@ -232,6 +232,12 @@ struct Config {
   HttpConfig http;
   SparkplugConfig sparkplug;
   AsciiConfig ascii;
+  // history: {max-bytes}: the in-memory history of TPDO values the
+  // dashboard's charts read (GET .../nodes/{node}/history, issue 18).
+  // 0 = off; else 1 MiB..16 GiB. Default 64 MiB (history/value_history.hpp).
+  struct History {
+    std::uint64_t max_bytes = std::uint64_t{64} << 20;
+  } history;
 };
 
 // Parses YAML text; `file` is used in error messages only. Relative file

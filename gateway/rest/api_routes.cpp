@@ -7,6 +7,7 @@
 #include "http_metrics.hpp"
 #include "metrics.hpp"
 #include "rest_api.hpp"
+#include "history_routes.hpp"
 #include "trace_routes.hpp"
 
 namespace gateway {
@@ -36,6 +37,7 @@ void register_openapi_route(http::HttpServer& server) {
 void register_api_routes(http::HttpServer& server, App& app) {
   register_rest_routes(server, app);
   register_trace_routes(server, app);
+  register_history_routes(server, app);
   register_metrics_route(server, app);
   register_openapi_route(server);
 }

@@ -19,6 +19,7 @@ add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp
   ${CMAKE_CURRENT_LIST_DIR}/api_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/trace_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/history_routes.cpp
   ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp)
 target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR})
 target_link_libraries(gateway_rest PUBLIC gateway_app gateway_core gateway_http gateway_messages gateway_edstool

@@ -47,6 +47,7 @@ const std::map<std::pair<std::string, std::string>, Expect> kMatrix = {
     {{"POST", "/api/v1/networks/{net}/nodes/{node}/nmt"}, {Role::Operator, R"({"command":"start"})"}},
     {{"GET", "/api/v1/networks/{net}/nodes/{node}/od"}, {Role::Viewer, ""}},
     {{"GET", "/api/v1/networks/{net}/nodes/{node}/emcy"}, {Role::Viewer, ""}},
+    {{"GET", "/api/v1/networks/{net}/nodes/{node}/history"}, {Role::Viewer, ""}},  // issue 18: charts
     {{"PUT", "/api/v1/networks/{net}/nodes/{node}/rpdo/{n}"}, {Role::Operator, R"({"raw":"0f00"})"}},
     {{"GET", "/api/v1/networks/{net}/nodes/{node}/pdo"}, {Role::Viewer, ""}},
     {{"POST", "/api/v1/networks/{net}/nodes/{node}/pdo/read"}, {Role::Operator, ""}},

@@ -1,0 +1,182 @@
+#include "history_routes.hpp"
+
+#include <boost/json/array.hpp>
+#include <boost/json/object.hpp>
+#include <boost/json/serialize.hpp>
+#include <charconv>
+#include <chrono>
+
+#include "canopen/eds/eds.hpp"
+#include "core/format.hpp"
+#include "json_text.hpp"
+
+namespace gateway {
+
+namespace {
+
+namespace json = boost::json;
+using http::Request;
+using http::Responder;
+using http::Response;
+
+std::optional<std::uint32_t> parse_hex_digits(std::string_view s, std::size_t digits) {
+  if (s.size() != digits) return std::nullopt;
+  std::uint32_t v = 0;
+  const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v, 16);
+  if (ec != std::errc() || p != s.data() + s.size()) return std::nullopt;
+  return v;
+}
+
+std::string rfc3339(std::chrono::system_clock::time_point t) {
+  std::string out;
+  detail::append_timestamp(out, detail::to_unix_time(t));
+  return out.size() >= 2 ? out.substr(1, out.size() - 2) : out;  // without the quotes
+}
+
+// A stored float as the double with the float's shortest digits
+// (12.3f -> 12.3, not 12.300000190734863): what was recorded, no more.
+double tidy(float f) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, f);
+  double d = f;
+  std::from_chars(buf, r.ptr, d);
+  return d;
+}
+
+// Only protobuf acceptable to the client: this answer has no protobuf
+// message (406, as the other JSON-only routes answer).
+bool accepts_only_protobuf(const Request& r) {
+  const auto accept = r.header("accept");
+  if (!accept) return false;
+  auto has = [&](std::string_view what) { return accept->find(what) != std::string_view::npos; };
+  return has("application/x-protobuf") && !has("json") && !has("*/*") && !has("application/*");
+}
+
+void get_history(App& app, const Request& req, Responder respond) {
+  if (accepts_only_protobuf(req))
+    return respond(Response::problem(406, "this resource is JSON only (application/json); no protobuf message"));
+  const auto net = core::parse_decimal(req.param("net"));
+  if (!net) return respond(Response::problem(400, "network must be a decimal number, not '" +
+                                                      std::string(req.param("net")) + "'"));
+  if (*net == 0 || *net > app.config().networks.size())
+    return respond(Response::problem(404, "network " + std::to_string(*net) + " is not configured (networks are 1.." +
+                                              std::to_string(app.config().networks.size()) + ")"));
+  const auto node = core::parse_decimal(req.param("node"));
+  if (!node || *node == 0 || *node > 127)
+    return respond(Response::problem(400, "node-ID must be 1..127, not '" + std::string(req.param("node")) + "'"));
+  std::int64_t window = history::kDefaultWindow;
+  if (auto w = req.query_param("window")) {
+    const auto n = core::parse_decimal(*w);
+    if (!n || *n < history::kMinWindow || *n > history::kMaxWindow)
+      return respond(Response::problem(400, "window must be a number of seconds " + std::to_string(history::kMinWindow) +
+                                                ".." + std::to_string(history::kMaxWindow) + ", not '" +
+                                                std::string(*w) + "'"));
+    window = *n;
+  }
+  std::vector<history::ObjectId> objects;
+  if (auto o = req.query_param("objects")) {
+    std::string error;
+    auto parsed = parse_history_objects(*o, error);
+    if (!parsed) return respond(Response::problem(400, error));
+    objects = std::move(*parsed);
+  }
+  const auto* h = app.value_history();
+  if (h == nullptr) return respond(Response::problem(404, "history is off (history.max-bytes: 0)"));
+
+  const auto now = std::chrono::floor<std::chrono::seconds>(std::chrono::system_clock::now());
+  const auto result = h->query(*net, static_cast<std::uint8_t>(*node), objects, window, now);
+  const auto* desc = app.description(*net, static_cast<std::uint8_t>(*node));
+  json::array series;
+  for (const auto& s : result.series) {
+    json::object o;
+    o["object"] = core::hex_number(s.object.index, 4) + ":" + core::hex_number(s.object.sub, 2);
+    o["index"] = s.object.index;
+    o["sub"] = s.object.sub;
+    std::string name = s.name;
+    canopen::DataType type = s.type;
+    json::value unit = nullptr;
+    json::value factor = nullptr;
+    if (desc != nullptr) {
+      // The node's description as configured now names the object; its
+      // unit and scale are the vendor's (EntryFacts), else raw.
+      if (const auto* e = desc->od.find(s.object.index, s.object.sub)) {
+        if (!e->name.empty()) name = e->name;
+        type = e->type;
+      }
+      const auto facts = desc->facts(s.object.index, s.object.sub);
+      if (!facts.unit.empty()) unit = facts.unit;
+      if (facts.factor) factor = *facts.factor;
+    }
+    o["name"] = name;
+    o["type"] = canopen::standard_name(type);
+    o["unit"] = std::move(unit);
+    o["factor"] = std::move(factor);
+    json::array t, mean, min, max;
+    t.reserve(s.points.size());
+    mean.reserve(s.points.size());
+    min.reserve(s.points.size());
+    max.reserve(s.points.size());
+    for (const auto& p : s.points) {
+      t.emplace_back(p.t);
+      if (p.gap) {
+        mean.emplace_back(nullptr);
+        min.emplace_back(nullptr);
+        max.emplace_back(nullptr);
+      } else {
+        mean.emplace_back(tidy(p.mean));
+        min.emplace_back(tidy(p.min));
+        max.emplace_back(tidy(p.max));
+      }
+    }
+    o["t"] = std::move(t);
+    o["mean"] = std::move(mean);
+    o["min"] = std::move(min);
+    o["max"] = std::move(max);
+    series.emplace_back(std::move(o));
+  }
+  json::object body;
+  body["network"] = *net;
+  body["node"] = *node;
+  body["window"] = window;
+  body["resolution"] = result.resolution;
+  body["from"] = rfc3339(now - std::chrono::seconds(window));
+  body["to"] = rfc3339(now);
+  body["series"] = std::move(series);
+  json::object memory;
+  memory["bytes"] = h->bytes();
+  memory["maxBytes"] = h->max_bytes();
+  memory["objects"] = h->objects();
+  memory["refusedObjects"] = h->refused_objects();
+  body["memory"] = std::move(memory);
+  respond(Response::json(json::serialize(body)));
+}
+
+}  // namespace
+
+std::optional<std::vector<history::ObjectId>> parse_history_objects(std::string_view text, std::string& error) {
+  std::vector<history::ObjectId> out;
+  std::size_t start = 0;
+  while (true) {
+    const auto comma = text.find(',', start);
+    const std::string_view item = text.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start);
+    const auto colon = item.find(':');
+    const auto index = colon == std::string_view::npos ? std::nullopt : parse_hex_digits(item.substr(0, colon), 4);
+    const auto sub = colon == std::string_view::npos ? std::nullopt : parse_hex_digits(item.substr(colon + 1), 2);
+    if (!index || !sub) {
+      error = "objects must be a comma-separated list of IIII:SS in hex (e.g. 6401:01,6000:01), not '" +
+              std::string(item) + "' in '" + std::string(text) + "'";
+      return std::nullopt;
+    }
+    out.push_back({static_cast<std::uint16_t>(*index), static_cast<std::uint8_t>(*sub)});
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+void register_history_routes(http::HttpServer& server, App& app) {
+  server.add_route("GET", "/api/v1/networks/{net}/nodes/{node}/history",
+                   [a = &app](const Request& req, Responder respond) { get_history(*a, req, std::move(respond)); });
+}
+
+}  // namespace gateway
