@@ -767,6 +767,8 @@ function renderNodeHeader() {
 const charts = createCharts({
   api, el, download: downloadFile,
   nodeState: (id) => state.nodes.get(id)?.state,
+  startedAt: () => (state.gateway && Number.isFinite(state.gateway.uptimeSeconds)
+    ? (Date.now() - (performance.now() - state.gatewayLoadedAt)) / 1000 - state.gateway.uptimeSeconds : null),
   onChange: () => { state.dirty.values = true; },
 });
 

@@ -60,7 +60,9 @@ function newSeries() {
   return { server: null, live: [] };
 }
 
-export function createCharts({ api, el, download, nodeState, onChange }) {
+// startedAt(): when the gateway started, unix seconds on the browser's clock
+// (null if not known): its history cannot reach further back.
+export function createCharts({ api, el, download, nodeState, startedAt, onChange }) {
   const series = new Map();   // "node/IIII:s" -> series
   const scales = new Map();   // "node/IIII:s" -> {unit, factor, name} (history reply first, then the OD)
   const plots = new Map();    // "IIII:s" of the selected node -> {u, res, holder}
@@ -342,10 +344,11 @@ export function createCharts({ api, el, download, nodeState, onChange }) {
     p.u.setData(band ? [pts.x, mean, f(pts.min), f(pts.max)] : [pts.x, mean], false);
     const t = now();
     const s = series.get(sk(node, key));
-    // With the gateway's history the whole window is shown; with live samples
-    // only it grows from the first one, so a fresh chart is not a sliver.
-    const first = s && !s.server && pts.x.length ? pts.x[0] : -Infinity;
-    p.u.setScale('x', { min: Math.min(t - 2, Math.max(t - windowS, first)), max: t });
+    // The window, but not before there can be data (the gateway's start, or
+    // the first sample without its history), so a young chart is not a sliver
+    // at the right edge; at least a minute, or the window if shorter.
+    const began = s && s.server ? (startedAt() ?? -Infinity) + offset : pts.x.length ? pts.x[0] : -Infinity;
+    p.u.setScale('x', { min: Math.min(t - Math.min(60, windowS), Math.max(t - windowS, began)), max: t });
     let lo = Infinity, hi = -Infinity;
     for (let i = 0; i < pts.real; i++) {
       const v = mean[i];

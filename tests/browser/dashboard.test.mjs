@@ -880,17 +880,21 @@ async function partHistory() {
   await page.waitForFunction(([sel, n]) => Number(document.querySelector(sel).dataset.points) > n + 1, [chart, pointsAtStart]);
   const gaps = Number(await page.$eval(chart, (h) => h.dataset.gaps));
   check(gaps === gapsBefore + 1, `after stop and start the chart shows one more gap (data-gaps ${gapsBefore} -> ${gaps})`);
-  await page.$eval('#panel-node', (p) => p.scrollIntoView());
-  await shot(page, 'dashboard-history-gap.png');
 
-  // A reload draws the same from the gateway's history alone.
+  // A reload draws the same from the gateway's history alone, in the window
+  // the URL remembers (1 min here, where the seconds-old gap is easy to see).
+  await page.click('#chart-window button[data-window="60"]');
   await page.reload();
   await page.waitForSelector('body[data-loaded="1"]');
   await page.waitForFunction(([sel, want]) => {
     const h = document.querySelector(sel);
-    return h && h.querySelector('canvas') && Number(h.dataset.gaps) >= want;
+    return h && h.querySelector('canvas') && h.dataset.window === '60' && Number(h.dataset.gaps) >= want &&
+           document.querySelector('#chart-note').dataset.state === 'ok';
   }, [chart, gapsBefore + 1]);
-  check(true, `after a reload the gap comes from the gateway's history (data-gaps ${await page.$eval(chart, (h) => h.dataset.gaps)})`);
+  check(true, `after a reload the 1-min window is kept and the gap comes from the gateway's history ` +
+    `(data-gaps ${await page.$eval(chart, (h) => h.dataset.gaps)})`);
+  await page.$eval('#panel-node', (p) => p.scrollIntoView());
+  await shot(page, 'dashboard-history-gap.png');
 
   // CSV export of the chart: the window's buckets, an empty field at the gap.
   const [download] = await Promise.all([page.waitForEvent('download'), page.click(`${card} button[data-action=csv]`)]);
@@ -899,7 +903,7 @@ async function partHistory() {
   await download.saveAs(csvPath);
   const lines = fs.readFileSync(csvPath, 'utf8').trim().split(/\r?\n/);
   const name = await page.textContent(`${card} .value-name`);
-  check(file === 'net1-node10-6401_01-600.csv', `CSV file name ${file}`);
+  check(file === 'net1-node10-6401_01-60.csv', `CSV file name ${file}`);
   check(lines[0] === `time,${name}${sub.unit ? ` [${sub.unit}]` : ''}`, `CSV header "${lines[0]}" (no min/max at 1 s resolution)`);
   const rows = lines.slice(1).map((l) => l.split(','));
   const iso = /^\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d{3})?Z$/;
