@@ -88,7 +88,7 @@ void ValueHistory::record(std::uint32_t net, std::uint8_t node, std::uint16_t in
   const auto x = numeric(value);
   if (!x || max_bytes_ == 0) return;
   const std::int64_t now = unix_seconds(when);
-  if (now >= next_expiry_) {
+  if (now >= next_expiry_ || now + 60 < next_expiry_) {  // due, or the clock stepped back
     expire(when);
     next_expiry_ = now + 60;
   }

@@ -200,7 +200,7 @@ TEST(Config, ErrorsNameFileLineKeyAndReason) {
               HasSubstr("not a hex SHA-256"));
   EXPECT_THAT(config_error("networks: [1, 2\n"), HasSubstr("gw.yaml:2: not valid YAML"));
   EXPECT_THAT(config_error("networks: can0\n"), HasSubstr("networks: expected a list"));
-  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http, sparkplug, ascii)");
+  EXPECT_EQ(config_error("sync: 1\n"), "gw.yaml:1: sync: unknown key (known here: gateway, networks, mqtt, http, sparkplug, ascii, history)");
   EXPECT_THAT(config_error("- a\n"), HasSubstr("(top level): expected a mapping of keys"));
 }
 
@@ -982,6 +982,21 @@ TEST(Config, CaptureRingPerNetwork) {
               HasSubstr("networks[0].capture.max-bytes: 10 is out of range 65536..1073741824"));
   EXPECT_THAT(config_error("networks:\n  - interface: can0\n    capture: {seconds: 4}\n"),
               HasSubstr("networks[0].capture.seconds: unknown key"));
+}
+
+// history: {max-bytes} (issue 18, docs/reference/rest.md "GET .../history"):
+// the PDO value history's cap for the whole gateway, default 64 MiB; 0 turns
+// it off; anything else below 1 MiB or over 16 GiB is refused by name.
+TEST(Config, HistoryMaxBytes) {
+  EXPECT_EQ(parse_config("networks:\n  - interface: can0\n", "gw.yaml").history.max_bytes, 64u << 20);
+  EXPECT_EQ(parse_config("history: {max-bytes: 0}\n", "gw.yaml").history.max_bytes, 0u);
+  EXPECT_EQ(parse_config("history: {max-bytes: 268435456}\n", "gw.yaml").history.max_bytes, 256u << 20);
+  EXPECT_THAT(config_error("history: {max-bytes: 1000}\n"),
+              HasSubstr("gw.yaml:1: history.max-bytes: must be 0 (no history) or 1048576 (1 MiB) .. 17179869184 (16 GiB), "
+                        "not 1000"));
+  EXPECT_THAT(config_error("history: {max-bytes: 17179869185}\n"), HasSubstr("history.max-bytes: 17179869185 is out of range"));
+  EXPECT_THAT(config_error("history: {max-bytes: -1}\n"), HasSubstr("history.max-bytes"));
+  EXPECT_THAT(config_error("history: {window: 60}\n"), HasSubstr("history.window: unknown key (known here: max-bytes)"));
 }
 
 }  // namespace gateway

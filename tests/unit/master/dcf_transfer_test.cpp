@@ -277,8 +277,8 @@ TEST(PlanAllValues, EveryParameterValueWritten_EvenDefaults_NotRefuseWriteNorEnt
   EXPECT_FALSE(has(0x1010, 1));
   EXPECT_FALSE(has(0x1F51, 1));
   // The boot-up plan of the same DCF writes only what differs (and 1017h).
-  EXPECT_FALSE(std::any_of(plan_configuration(dcf).begin(), plan_configuration(dcf).end(),
-                           [](const ConfigWrite& w) { return w.index == 0x1006; }));
+  const auto boot_plan = plan_configuration(dcf);  // one vector: begin() and end() of two temporaries is UB
+  EXPECT_FALSE(std::any_of(boot_plan.begin(), boot_plan.end(), [](const ConfigWrite& w) { return w.index == 0x1006; }));
 }
 
 // 7.5.2.35/36 remapping order, frame by frame as the boot configurator:

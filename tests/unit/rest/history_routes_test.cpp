@@ -82,12 +82,19 @@ TEST(HistoryRoute, AnalogInputsOfTheDemoIoModuleAsSeriesWithAscendingTimes) {
 
   // Chosen objects only, in the tier the window asks for; one without
   // history is simply absent.
-  const auto two = get_json(rig, kNode10 + "/history?window=3600&objects=6401:02,2000:00");
+  // (percent-encoded, as a browser's URLSearchParams writes it)
+  const auto two = get_json(rig, kNode10 + "/history?window=3600&objects=6401%3A02%2C2000%3A00");
   EXPECT_EQ(two.at("resolution").to_number<int>(), 10);
   ASSERT_EQ(two.at("series").as_array().size(), 1U) << json::serialize(two);
   EXPECT_EQ(two.at("series").as_array()[0].as_object().at("object").as_string(), "6401:02");
   EXPECT_EQ(get_json(rig, kNode10 + "/history?window=86400").at("resolution").to_number<int>(), 60);
   EXPECT_EQ(get_json(rig, kNode10 + "/history?window=601").at("resolution").to_number<int>(), 10);
+  // /metrics: what the history holds, its cap, nothing refused.
+  const auto m = rig.request("GET", "/metrics").body;
+  EXPECT_THAT(m, HasSubstr("canopen_gateway_history_max_bytes 67108864\n"));
+  EXPECT_THAT(m, HasSubstr("canopen_gateway_history_refused_objects_total 0\n"));
+  EXPECT_THAT(m, ::testing::ContainsRegex("canopen_gateway_history_objects [1-9][0-9]*\n"));
+  EXPECT_THAT(m, ::testing::ContainsRegex("canopen_gateway_history_bytes [1-9][0-9]*\n"));
   // A node without TPDOs recorded: no series.
   EXPECT_TRUE(get_json(rig, "/api/v1/networks/1/nodes/99/history").at("series").as_array().empty());
 }

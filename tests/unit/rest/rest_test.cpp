@@ -488,7 +488,10 @@ TEST(Rest, MetricsFamiliesInTheirOrder) {
       "canopen_gateway_request_auth_failures_total", "canopen_gateway_requests_limited_total",
       "canopen_gateway_lss_operations_total", "canopen_gateway_lss_node_ids_assigned_total",
       "canopen_gateway_maintenance_operations_total",
-      "canopen_gateway_events_published_total", "canopen_gateway_mqtt_enabled", "canopen_gateway_websocket_clients",
+      "canopen_gateway_events_published_total", "canopen_gateway_mqtt_enabled",
+      "canopen_gateway_history_bytes", "canopen_gateway_history_max_bytes", "canopen_gateway_history_objects",
+      "canopen_gateway_history_refused_objects_total",  // issue 18: the PDO value history
+      "canopen_gateway_websocket_clients",
       "canopen_gateway_websocket_messages_total", "canopen_gateway_http_responses_total",
       "canopen_gateway_http_connections", "canopen_gateway_http_connections_refused_total",
       "canopen_gateway_http_connections_evicted_total", "canopen_gateway_http_header_timeouts_total",
