@@ -5,10 +5,9 @@
 // EDS files and devices and must never be interpreted as HTML.
 
 import { setupTrace } from './trace.js';
+import { createCharts, formatScaled } from './charts.js';
 
 const TOKEN_KEY = 'canopen-gateway.token';
-const CHART_WINDOW_S = 60;      // seconds of history shown in the small charts
-const HISTORY_MAX = 1200;       // samples kept per value (bounds memory at high PDO rates)
 const RENDER_INTERVAL_MS = 250; // live values and charts are redrawn at most 4x per second
 const EMCY_MAX = 200;
 
@@ -24,7 +23,6 @@ const state = {
   ownState: null,         // its NMT state (nodeState)
   nodes: new Map(),       // node-ID -> summary (+ hbAt: client time of the last heartbeat)
   values: new Map(),      // node-ID -> Map("index:sub" -> latest mapped value)
-  history: new Map(),     // "node/index:sub" -> {t: [], v: []}
   emcy: [],               // newest first
   selected: null,
   od: new Map(),          // node-ID -> OD response (cached: the EDS does not change at run time)
@@ -108,8 +106,6 @@ function fmtValue(value, type) {
   if (typeof value === 'number' && !Number.isInteger(value)) return String(Number(value.toPrecision(7)));
   return String(value);
 }
-
-const fmtNum = (n) => (Number.isInteger(n) ? String(n) : String(Number(n.toPrecision(4))));
 
 // A chartable number, or null (strings such as vs/os/d are not charted).
 function numeric(value, type) {
@@ -436,7 +432,7 @@ function restart() {
   state.authBlocked = false;
   state.nodes.clear();
   state.values.clear();
-  state.history.clear();
+  charts.reset();
   state.emcy = [];
   emcySeen.clear();
   state.od.clear();
@@ -484,7 +480,7 @@ function connectWs() {
     opened = true;
     state.wsOpen = true;
     // Reconnected after a gap: events were missed, so take a fresh snapshot.
-    if (state.wsRetry > 0) loadNodes().then(() => loadNetwork()).catch(() => {});
+    if (state.wsRetry > 0) { loadNodes().then(() => loadNetwork()).catch(() => {}); charts.refetch(); }
     state.wsRetry = 0;
     ws.send('{}'); // the dashboard wants every network, node and kind
     setWs('open', 'live');
@@ -523,6 +519,7 @@ function onEvent(msg) {
     case 'state':
       // A boot-up starts without the errors the node had (as lastEmcy on the gateway).
       touchNode(ev.node, ev.cause === 'boot-up' ? { state: ev.state, lastEmcy: null } : { state: ev.state });
+      charts.stateChanged(ev.node, ev.state, gatewayTime(ev.timestamp));
       break;
     case 'emcy': {
       const n = touchNode(ev.node, {});
@@ -563,21 +560,21 @@ function scheduleNodeRefresh() {
   nodeRefresh = setTimeout(() => { nodeRefresh = null; loadNodes().catch(() => {}); }, 1500);
 }
 
+// An event's time (the gateway's clock, as its history uses), unix seconds.
+function gatewayTime(ts) {
+  const ms = Date.parse(ts);
+  return Number.isFinite(ms) ? ms / 1000 : charts.now();
+}
+
 function onTpdo(ev) {
   const m = valuesOf(ev.node);
-  const t = Date.now() / 1000;
+  const t = gatewayTime(ev.timestamp);
   for (const v of ev.values || []) {
     const key = keyOf(v.index, v.subIndex);
     if (!m.has(key)) state.dirty.valueLayout = true;
     m.set(key, { ...v, tpdo: ev.tpdo, timestamp: ev.timestamp });
     const y = numeric(v.value, v.type);
-    if (y === null) continue;
-    const hk = `${ev.node}/${key}`;
-    let h = state.history.get(hk);
-    if (!h) { h = { t: [], v: [] }; state.history.set(hk, h); }
-    h.t.push(t);
-    h.v.push(y);
-    if (h.t.length > HISTORY_MAX) { h.t.splice(0, h.t.length - HISTORY_MAX); h.v.splice(0, h.v.length - HISTORY_MAX); }
+    if (y !== null) charts.sample(ev.node, v.index, v.subIndex, y, t);
   }
   if (ev.node === state.selected) state.dirty.values = true;
 }
@@ -741,7 +738,7 @@ function selectNode(id) {
   $('#node-empty').hidden = true;
   $('#node-detail').hidden = false;
   $('#panel-node').dataset.node = id;
-  destroyCharts();
+  charts.select(id, state.net, !!state.nodes.get(id)?.own);
   state.dirty.nodes = state.dirty.values = state.dirty.valueLayout = state.dirty.emcy = true;
   renderOd(id);
   renderConfig(id);
@@ -768,30 +765,18 @@ function renderNodeHeader() {
                                   : identityText(n.identity) || (n.eds ? '' : 'no EDS configured: values are shown raw'));
 }
 
-const charts = new Map(); // "index:sub" -> uPlot of the selected node
+// Charts of the selected node: web/charts.js (server history + live samples).
+const charts = createCharts({
+  api, el, download: downloadFile,
+  nodeState: (id) => state.nodes.get(id)?.state,
+  startedAt: () => (state.gateway && Number.isFinite(state.gateway.uptimeSeconds)
+    ? (Date.now() - (performance.now() - state.gatewayLoadedAt)) / 1000 - state.gateway.uptimeSeconds : null),
+  onChange: () => { state.dirty.values = true; },
+});
 
-function destroyCharts() {
-  for (const c of charts.values()) c.destroy();
-  charts.clear();
-}
-
-function cssVar(name) { return getComputedStyle(document.documentElement).getPropertyValue(name).trim(); }
-
-function makeChart(target, width) {
-  if (!window.uPlot) return null; // vendor script missing: values still show, just no chart
-  const stroke = cssVar('--accent') || '#2563eb';
-  return new window.uPlot({
-    width, height: 44, class: 'spark',
-    cursor: { show: false }, legend: { show: false }, select: { show: false },
-    scales: {
-      x: { time: true },
-      // 8% headroom so extremes and flat lines stay visible inside the box.
-      y: { range: (u, min, max) => { const pad = min === max ? Math.max(1, Math.abs(min) * 0.1) : (max - min) * 0.08;
-                                       return [min - pad, max + pad]; } },
-    },
-    axes: [{ show: false }, { show: false }],
-    series: [{}, { stroke, width: 1.5, fill: cssVar('--accent-fill') || 'rgba(37,99,235,.12)', points: { show: false } }],
-  }, [[], []], target);
+// The value as shown: in its unit (raw x factor) where the EDS gives one, else raw.
+function valueText(id, key, v) {
+  return formatScaled(numeric(v.value, v.type), charts.scaleOf(id, key)) ?? fmtValue(v.value, v.type);
 }
 
 function renderValues() {
@@ -801,7 +786,7 @@ function renderValues() {
   const m = state.values.get(id) || new Map();
   const keys = [...m.keys()].sort();
   if (state.dirty.valueLayout) {
-    destroyCharts();
+    charts.destroy();
     if (!keys.length) {
       box.replaceChildren(el('div', { class: 'muted', text: state.nodes.get(id)?.own
         ? 'The gateway\'s own node sends no process data of its own. Its object dictionary is below; ' +
@@ -814,57 +799,27 @@ function renderValues() {
           el('div', { class: 'value-head' },
             el('span', { class: 'value-name', title: `${v.name || k} (${v.type}, TPDO${v.tpdo})`, text: v.name || k }),
             el('span', { class: 'value-meta mono', text: k.replace(':', 'h/'),
-                         title: `object ${k.replace(':', 'h sub ')}, type ${v.type}, TPDO${v.tpdo}` })),
+                         title: `object ${k.replace(':', 'h sub ')}, type ${v.type}, TPDO${v.tpdo}` }),
+            el('button', { type: 'button', class: 'btn btn-small btn-ghost chart-csv', 'data-action': 'csv',
+                           title: 'Download this chart\'s window as CSV', text: 'CSV' })),
           el('div', { class: 'value-row' },
             el('span', { class: 'value mono', 'data-field': 'value' }),
-            el('span', { class: 'value-range mono', 'data-field': 'range', title: `lowest and highest in the chart` })),
-          el('div', { class: 'chart', 'data-field': 'chart' }));
+            el('span', { class: 'value-range mono', 'data-field': 'range', title: 'lowest and highest in the chart' })),
+          el('div', { class: 'chart', 'data-field': 'chart', role: 'img' }));
       }));
     }
     state.dirty.valueLayout = false;
   }
-  const now = Date.now() / 1000;
   for (const card of box.querySelectorAll('.value-card')) {
     const k = card.dataset.key;
     const v = m.get(k);
     if (!v) continue;
-    setText(card.querySelector('[data-field=value]'), fmtValue(v.value, v.type));
-    const h = state.history.get(`${id}/${k}`);
-    const holder = card.querySelector('[data-field=chart]');
-    if (!h || !h.t.length) continue;
-    let c = charts.get(k);
-    if (!c) {
-      c = makeChart(holder, Math.max(120, holder.clientWidth));
-      if (!c) continue;
-      charts.set(k, c);
-    }
-    // Only the visible window is handed to the chart; older samples stay for a moment in history.
-    let i = 0;
-    while (i < h.t.length && h.t[i] < now - CHART_WINDOW_S) i++;
-    if (i > 0 && i > h.t.length / 2) { h.t.splice(0, i); h.v.splice(0, i); i = 0; }
-    const xs = h.t.slice(i), ys = h.v.slice(i);
-    // Event-driven TPDOs are only sent on change: an operational node's
-    // value holds until the next one, so the line is drawn up to now.
-    if (xs.length && state.nodes.get(id)?.state === 'operational' && now > xs[xs.length - 1]) {
-      xs.push(now);
-      ys.push(ys[ys.length - 1]);
-    }
-    c.setData([xs, ys], true);
-    let lo = Infinity, hi = -Infinity;
-    for (const y of ys) { if (y < lo) lo = y; if (y > hi) hi = y; }
-    setText(card.querySelector('[data-field=range]'), lo === hi ? '' : `${fmtNum(lo)} … ${fmtNum(hi)}`);
-    // The window grows to CHART_WINDOW_S from the first sample, so a fresh
-    // chart is filled rather than a sliver at the right edge.
-    c.setScale('x', { min: Math.min(now - 2, Math.max(now - CHART_WINDOW_S, h.t[0])), max: now });
+    setText(card.querySelector('[data-field=value]'), valueText(id, k, v));
+    charts.draw(card, k);
   }
 }
 
-const chartResize = new ResizeObserver(() => {
-  for (const [k, c] of charts) {
-    const holder = document.querySelector(`#values .value-card[data-key="${k}"] [data-field=chart]`);
-    if (holder && holder.clientWidth && Math.abs(holder.clientWidth - c.width) > 2) c.setSize({ width: holder.clientWidth, height: 44 });
-  }
-});
+const chartResize = new ResizeObserver(() => charts.resize());
 
 // ---------------------------------------------------------------- rendering: EMCY
 
@@ -904,6 +859,7 @@ async function renderOd(id) {
     try {
       od = await api('GET', `/networks/${state.net}/nodes/${id}/od`);
       state.od.set(id, od);
+      charts.setOd(id, od);
     } catch (e) {
       if (state.selected === id) info.textContent = e.status === 404 ? describeError(e).replace(/^Error 404: /, '') : describeError(e);
       return;
@@ -1391,8 +1347,8 @@ function setProgress(bar, label, done, total, unit) {
   }
 }
 
-function downloadFile(name, text) {
-  const url = URL.createObjectURL(new Blob([text], { type: 'text/plain' }));
+function downloadFile(name, text, type = 'text/plain') {
+  const url = URL.createObjectURL(new Blob([text], { type }));
   const a = el('a', { href: url, download: name, hidden: true });
   document.body.append(a);
   a.click();
@@ -1486,6 +1442,7 @@ async function odOf(id) {
   if (!od) {
     od = await api('GET', nodePath(id, 'od'));
     state.od.set(id, od);
+    charts.setOd(id, od);
   }
   return od;
 }
@@ -1668,6 +1625,12 @@ function setupEvents() {
   $('#panel-node').addEventListener('click', (e) => {
     const b = e.target.closest('button[data-nmt]');
     if (b && state.selected !== null) nmt(state.selected, b.dataset.nmt);
+    const csv = e.target.closest('button[data-action=csv]');
+    if (csv) {
+      const card = csv.closest('.value-card');
+      const v = valuesOf(state.selected).get(card.dataset.key);
+      charts.csv(card.dataset.key, v && v.name);
+    }
   });
   $('#nmt-all').addEventListener('click', (e) => {
     const b = e.target.closest('button[data-nmt-all]');
@@ -1703,6 +1666,7 @@ function setupEvents() {
 function tick() {
   if (state.dirty.nodes) { state.dirty.nodes = false; renderNodes(); }
   if (state.dirty.values || state.dirty.valueLayout) { state.dirty.values = false; renderValues(); }
+  charts.tick();
   if (state.dirty.emcy) { state.dirty.emcy = false; renderEmcy(); }
 }
 

@@ -23,8 +23,8 @@ const GATEWAY = args.gateway || process.env.GATEWAY_BIN;
 const WEB_ROOT = path.resolve(args['web-root'] || path.join(here, '..', '..', 'web'));
 const ARTIFACTS = path.resolve(args.artifacts || path.join(process.cwd(), 'artifacts'));
 const CHROMIUM = process.env.CHROMIUM || '/usr/bin/chromium';
-// Below ctest's TIMEOUT 180, so a hang ends here with logs rather than a bare kill.
-const TOTAL_TIMEOUT_MS = Number(process.env.DASHBOARD_TEST_TIMEOUT_MS || 150_000);
+// Below ctest's TIMEOUT 300, so a hang ends here with logs rather than a bare kill.
+const TOTAL_TIMEOUT_MS = Number(process.env.DASHBOARD_TEST_TIMEOUT_MS || 270_000);
 const STEP_TIMEOUT_MS = 15_000;
 
 function parseArgs(list) {
@@ -920,6 +920,124 @@ async function partTrace() {
   await stopGateway(g);
 }
 
+// ---------------------------------------------------------------- part: charts and server history
+
+// Issue 18 item 3: value charts with time and value axes, served by the
+// gateway's history (GET .../nodes/{node}/history, docs/reference/rest.md),
+// gaps where the node left Operational (CiA 301 7.3.2, NMT state machine: a
+// stopped node sends no PDOs, so its values do not "hold" meanwhile), CSV export.
+async function partHistory() {
+  const g = await startGateway('gateway-history',
+    `gateway: { state-dir: "@STATE@" }\nhttp: { web-root: "${WEB_ROOT}" }\n`,
+    ['--demo', '--http', '127.0.0.1:0']);
+  const base = await waitListening(g);
+  const ctx = await launch('history');
+  const page = await ctx.newPage();
+  watchConsole(page, 'history');
+  const historyAsked = [];
+  page.on('response', (r) => {
+    const u = new URL(r.url());
+    if (/\/nodes\/10\/history$/.test(u.pathname)) historyAsked.push({ window: u.searchParams.get('window'), status: r.status() });
+  });
+  await page.goto(base + '/#node=10');
+  await page.waitForSelector('body[data-loaded="1"]');
+  await page.waitForSelector('body[data-ws="open"]');
+  const card = '#values .value-card[data-node="10"][data-key="6401:1"]';
+  const chart = `${card} [data-field=chart]`;
+  await page.waitForSelector(`${chart} canvas`);
+  // Drawn at least twice, so the axes have their ticks.
+  await page.waitForFunction((sel) => Number(document.querySelector(sel)?.dataset.points) >= 2, chart);
+  const axes = await page.$eval(chart, (h) => ({
+    axes: h.querySelectorAll('.u-axis').length, x: h.dataset.xTicks || '', y: h.dataset.yTicks || '',
+    unit: h.dataset.unit, label: h.getAttribute('aria-label') }));
+  check(axes.axes === 2 && /^\d{2}:\d{2}(:\d{2})?(\|\d{2}:\d{2}(:\d{2})?)+$/.test(axes.x) && /\d/.test(axes.y),
+    `node 10, 6401h sub 1: a chart with a time axis (${axes.x}) and a value axis (${axes.y})`);
+  // The unit, where the device description gives one (GET .../od sub-entries).
+  const od = await getJson(base, '/networks/1/nodes/10/od');
+  const sub = od.objects.find((o) => o.index === 0x6401)?.subs.find((s) => s.subIndex === 1) || {};
+  const value = await page.textContent(`${card} [data-field=value]`);
+  if (sub.unit) {
+    check(axes.unit === sub.unit && value.endsWith(` ${sub.unit}`),
+      `the unit from the EDS (${sub.unit}, factor ${sub.factor ?? 1}) on the value (${value}) and the y axis`);
+  } else {
+    check(axes.unit === '' && /^-?\d+$/.test(value), `no unit in the EDS: the raw value (${value})`);
+  }
+  check(historyAsked.length > 0 && historyAsked[0].status === 200,
+    `on page load the history of node 10 is fetched (window ${historyAsked[0]?.window}, ${historyAsked[0]?.status})`);
+
+  // The window selector: each window is fetched from the gateway and drawn.
+  for (const [w, res] of [['3600', '10'], ['600', '1']]) {
+    const asked = historyAsked.length;
+    await Promise.all([
+      page.waitForResponse((r) => /\/nodes\/10\/history$/.test(new URL(r.url()).pathname) &&
+                                  new URL(r.url()).searchParams.get('window') === w),
+      page.click(`#chart-window button[data-window="${w}"]`)]);
+    await page.waitForFunction(([sel, win]) => {
+      const h = document.querySelector(sel);
+      return h && h.dataset.window === win && Number(h.dataset.points) > 0 && h.querySelector('canvas') &&
+             document.querySelector('#chart-note').dataset.state === 'ok';
+    }, [chart, w]);
+    const got = historyAsked.slice(asked);
+    const drawn = await page.$eval(chart, (h) => ({ res: h.dataset.resolution, points: h.dataset.points }));
+    check(got.some((r) => r.window === w && r.status === 200) && drawn.res === res,
+      `window ${w} s: history?window=${w} asked (${got.map((r) => r.window + ':' + r.status).join(', ')}), ` +
+      `drawn at ${drawn.res} s resolution, ${drawn.points} points`);
+    check(new URLSearchParams((await page.evaluate(() => location.hash)).slice(1)).get('w') === w,
+      `window ${w} s remembered in the URL`);
+  }
+
+  // Stop node 10 for a few seconds: its values stop (a stopped node sends no
+  // PDO), and the chart breaks there instead of drawing a flat line through.
+  const gapsBefore = Number(await page.$eval(chart, (h) => h.dataset.gaps));
+  const nmtRest = (command) => fetch(`${base}/api/v1/networks/1/nodes/10/nmt`, {
+    method: 'POST', headers: { 'Content-Type': 'application/json' }, body: JSON.stringify({ command }) });
+  check((await nmtRest('stop')).ok, 'NMT stop node 10 (REST)');
+  await page.waitForFunction(() => document.querySelector('#node-state')?.textContent === 'stopped');
+  await sleep(3000);
+  check((await nmtRest('start')).ok, 'NMT start node 10 (REST)');
+  await page.waitForFunction(() => document.querySelector('#node-state')?.textContent === 'operational');
+  const pointsAtStart = Number(await page.$eval(chart, (h) => h.dataset.points));
+  await page.waitForFunction(([sel, n]) => Number(document.querySelector(sel).dataset.points) > n + 1, [chart, pointsAtStart]);
+  const gaps = Number(await page.$eval(chart, (h) => h.dataset.gaps));
+  check(gaps === gapsBefore + 1, `after stop and start the chart shows one more gap (data-gaps ${gapsBefore} -> ${gaps})`);
+
+  // A reload draws the same from the gateway's history alone, in the window
+  // the URL remembers (1 min here, where the seconds-old gap is easy to see).
+  await page.click('#chart-window button[data-window="60"]');
+  await page.reload();
+  await page.waitForSelector('body[data-loaded="1"]');
+  await page.waitForFunction(([sel, want]) => {
+    const h = document.querySelector(sel);
+    return h && h.querySelector('canvas') && h.dataset.window === '60' && Number(h.dataset.gaps) >= want &&
+           document.querySelector('#chart-note').dataset.state === 'ok';
+  }, [chart, gapsBefore + 1]);
+  check(true, `after a reload the 1-min window is kept and the gap comes from the gateway's history ` +
+    `(data-gaps ${await page.$eval(chart, (h) => h.dataset.gaps)})`);
+  await page.$eval('#panel-node', (p) => p.scrollIntoView());
+  await shot(page, 'dashboard-history-gap.png');
+
+  // CSV export of the chart: the window's buckets, an empty field at the gap.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click(`${card} button[data-action=csv]`)]);
+  const file = download.suggestedFilename();
+  const csvPath = path.join(ARTIFACTS, file);
+  await download.saveAs(csvPath);
+  const lines = fs.readFileSync(csvPath, 'utf8').trim().split(/\r?\n/);
+  const name = await page.textContent(`${card} .value-name`);
+  check(file === 'net1-node10-6401_01-60.csv', `CSV file name ${file}`);
+  check(lines[0] === `time,${name}${sub.unit ? ` [${sub.unit}]` : ''}`, `CSV header "${lines[0]}" (no min/max at 1 s resolution)`);
+  const rows = lines.slice(1).map((l) => l.split(','));
+  const iso = /^\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d{3})?Z$/;
+  check(rows.length > 5 && rows.every((r) => r.length === 2 && iso.test(r[0]) && (r[1] === '' || Number.isFinite(Number(r[1])))),
+    `CSV: ${rows.length} rows of ISO 8601 UTC time and value`);
+  check(rows.some((r) => r[1] === '') && rows.filter((r) => r[1] !== '').length >= rows.length - 2,
+    `CSV: the gap is a row with an empty value (${rows.filter((r) => r[1] === '').map((r) => r[0]).join(', ')})`);
+
+  check(consoleErrors.length === 0, `no errors in the browser console${consoleErrors.length ? ': ' + consoleErrors.join(' | ') : ''}`);
+  await ctx.close();
+  browsers.splice(browsers.indexOf(ctx), 1);
+  await stopGateway(g);
+}
+
 // ---------------------------------------------------------------- main
 
 try {
@@ -934,6 +1052,7 @@ try {
   await partTrace();
   if (process.env.DASHBOARD_TOKEN_TEST === '1') await partToken();
   else log('token part skipped (set DASHBOARD_TOKEN_TEST=1 to run it)');
+  await partHistory();
   await finish(0);
 } catch (e) {
   const page = browsers.flatMap((b) => b.pages()).at(-1);

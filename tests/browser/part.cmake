@@ -9,6 +9,6 @@ add_test(NAME browser.dashboard
 set_tests_properties(browser.dashboard PROPERTIES
   LABELS "system;browser"
   RUN_SERIAL ON
-  TIMEOUT 180
+  TIMEOUT 300
   SKIP_RETURN_CODE 77
   ENVIRONMENT "DASHBOARD_TOKEN_TEST=1")
