@@ -5,7 +5,8 @@
 # and hex.
 # gateway_core_types: the vocabulary and formatting, no state; the codecs
 # (messages), auth and the transports use it without the core itself.
-add_library(gateway_core_types STATIC ${CMAKE_CURRENT_LIST_DIR}/request.cpp ${CMAKE_CURRENT_LIST_DIR}/format.cpp)
+add_library(gateway_core_types STATIC ${CMAKE_CURRENT_LIST_DIR}/request.cpp ${CMAKE_CURRENT_LIST_DIR}/format.cpp
+                                       ${CMAKE_CURRENT_LIST_DIR}/json_input.cpp)
 target_include_directories(gateway_core_types PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_core_types PUBLIC gateway_lib canopen_pdo canopen_od Boost::json PRIVATE canopen_options)
 

@@ -1,9 +1,10 @@
 #include "event_stream.hpp"
 
 #include <algorithm>
-#include <boost/json/parse.hpp>
 #include <boost/json/serialize.hpp>
 #include <boost/json/value.hpp>
+
+#include "core/json_input.hpp"
 
 namespace gateway::http {
 
@@ -41,17 +42,8 @@ bool read_ints(const boost::json::value& v, std::uint64_t max, std::vector<T>& o
 }  // namespace
 
 bool EventFilter::parse(std::string_view text, std::string& error) {
-  boost::system::error_code ec;
-  boost::json::value v = boost::json::parse(text, ec);
-  if (ec) {
-    error = "filter is not valid JSON: " + ec.message();
-    return false;
-  }
-  const auto* obj = v.if_object();
-  if (!obj) {
-    error = "filter must be a JSON object";
-    return false;
-  }
+  const auto obj = core::parse_json_object(text, "filter", "", error);
+  if (!obj) return false;
   std::vector<std::uint32_t> networks;
   std::vector<std::uint8_t> nodes;
   std::uint32_t kinds = 0;

@@ -1,12 +1,12 @@
 #include "trace_stream.hpp"
 
-#include <boost/json/parse.hpp>
 #include <boost/json/serialize.hpp>
 #include <boost/json/value.hpp>
 #include <cstdio>
 #include <ctime>
 
 #include "core/format.hpp"
+#include "core/json_input.hpp"
 
 namespace gateway::trace {
 
@@ -42,17 +42,8 @@ std::string frame_json(const Traced& t, std::string_view decoded, Service servic
 }
 
 bool IdFilter::parse(std::string_view text, std::string& error) {
-  boost::system::error_code ec;
-  boost::json::value v = boost::json::parse(text, ec);
-  if (ec) {
-    error = "filter is not valid JSON: " + ec.message();
-    return false;
-  }
-  const auto* obj = v.if_object();
-  if (!obj) {
-    error = "filter must be a JSON object: {\"ids\": [[from, to], ...]}";
-    return false;
-  }
+  const auto obj = core::parse_json_object(text, "filter", ": {\"ids\": [[from, to], ...]}", error);
+  if (!obj) return false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
   for (const auto& kv : *obj) {
     if (kv.key() != "ids") {
