@@ -9,6 +9,7 @@
 #include "canopen/eds/eds.hpp"
 #include "core/format.hpp"
 #include "json_text.hpp"
+#include "route_checks.hpp"
 
 namespace gateway {
 
@@ -27,12 +28,6 @@ std::optional<std::uint32_t> parse_hex_digits(std::string_view s, std::size_t di
   return v;
 }
 
-std::string rfc3339(std::chrono::system_clock::time_point t) {
-  std::string out;
-  detail::append_timestamp(out, detail::to_unix_time(t));
-  return out.size() >= 2 ? out.substr(1, out.size() - 2) : out;  // without the quotes
-}
-
 // A stored float as the double with the float's shortest digits
 // (12.3f -> 12.3, not 12.300000190734863): what was recorded, no more.
 double tidy(float f) {
@@ -43,27 +38,12 @@ double tidy(float f) {
   return d;
 }
 
-// Only protobuf acceptable to the client: this answer has no protobuf
-// message (406, as the other JSON-only routes answer).
-bool accepts_only_protobuf(const Request& r) {
-  const auto accept = r.header("accept");
-  if (!accept) return false;
-  auto has = [&](std::string_view what) { return accept->find(what) != std::string_view::npos; };
-  return has("application/x-protobuf") && !has("json") && !has("*/*") && !has("application/*");
-}
-
 void get_history(App& app, const Request& req, Responder respond) {
-  if (accepts_only_protobuf(req))
-    return respond(Response::problem(406, "this resource is JSON only (application/json); no protobuf message"));
-  const auto net = core::parse_decimal(req.param("net"));
-  if (!net) return respond(Response::problem(400, "network must be a decimal number, not '" +
-                                                      std::string(req.param("net")) + "'"));
-  if (*net == 0 || *net > app.config().networks.size())
-    return respond(Response::problem(404, "network " + std::to_string(*net) + " is not configured (networks are 1.." +
-                                              std::to_string(app.config().networks.size()) + ")"));
-  const auto node = core::parse_decimal(req.param("node"));
-  if (!node || *node == 0 || *node > 127)
-    return respond(Response::problem(400, "node-ID must be 1..127, not '" + std::string(req.param("node")) + "'"));
+  if (accepts_only_protobuf(req)) return respond(json_only_refusal());
+  std::uint32_t net = 0;
+  std::uint8_t node = 0;
+  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_node(req, node, false)) return respond(std::move(*err));
   std::int64_t window = history::kDefaultWindow;
   if (auto w = req.query_param("window")) {
     const auto n = core::parse_decimal(*w);
@@ -84,8 +64,8 @@ void get_history(App& app, const Request& req, Responder respond) {
   if (h == nullptr) return respond(Response::problem(404, "history is off (history.max-bytes: 0)"));
 
   const auto now = std::chrono::floor<std::chrono::seconds>(std::chrono::system_clock::now());
-  const auto result = h->query(*net, static_cast<std::uint8_t>(*node), objects, window, now);
-  const auto* desc = app.description(*net, static_cast<std::uint8_t>(*node));
+  const auto result = h->query(net, node, objects, window, now);
+  const auto* desc = app.description(net, node);
   json::array series;
   for (const auto& s : result.series) {
     json::object o;
@@ -135,12 +115,12 @@ void get_history(App& app, const Request& req, Responder respond) {
     series.emplace_back(std::move(o));
   }
   json::object body;
-  body["network"] = *net;
-  body["node"] = *node;
+  body["network"] = net;
+  body["node"] = node;
   body["window"] = window;
   body["resolution"] = result.resolution;
-  body["from"] = rfc3339(now - std::chrono::seconds(window));
-  body["to"] = rfc3339(now);
+  body["from"] = timestamp_text(now - std::chrono::seconds(window));
+  body["to"] = timestamp_text(now);
   body["series"] = std::move(series);
   json::object memory;
   memory["bytes"] = h->bytes();

@@ -17,6 +17,7 @@ configure_file(${CMAKE_CURRENT_LIST_DIR}/openapi_document.cpp.in ${CMAKE_CURRENT
 
 add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/route_checks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/api_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/trace_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/history_routes.cpp

@@ -22,6 +22,7 @@
 #include "json_text.hpp"
 #include "request_codec.hpp"
 #include "rest_parse.hpp"
+#include "route_checks.hpp"
 #include "sparkplug/edge_client.hpp"
 #include "trace/network_trace.hpp"
 #include "trace_routes.hpp"
@@ -35,35 +36,9 @@ using http::Request;
 using http::Responder;
 using http::Response;
 
-constexpr std::string_view kProtobuf = "application/x-protobuf";
+bool accepts_protobuf(const Request& r) { return header_contains(r.header("accept"), kProtobuf); }
+bool sends_protobuf(const Request& r) { return header_contains(r.header("content-type"), kProtobuf); }
 
-bool contains(std::optional<std::string_view> header, std::string_view what) {
-  return header && header->find(what) != std::string_view::npos;
-}
-bool accepts_protobuf(const Request& r) { return contains(r.header("accept"), kProtobuf); }
-bool sends_protobuf(const Request& r) { return contains(r.header("content-type"), kProtobuf); }
-// Only protobuf is acceptable to the client (no JSON, no wildcard): a route
-// that has no protobuf message answers 406 rather than JSON it cannot read.
-bool accepts_only_protobuf(const Request& r) {
-  const auto accept = r.header("accept");
-  return contains(accept, kProtobuf) && !contains(accept, "json") && !contains(accept, "*/*") &&
-         !contains(accept, "application/*");
-}
-
-Response from_reply(Reply reply) {
-  Response r;
-  r.status = reply.status;
-  r.content_type = std::move(reply.content_type);
-  r.body = std::move(reply.body);
-  if (reply.retry_after > 0) r.headers.emplace_back("Retry-After", std::to_string(reply.retry_after));
-  return r;
-}
-
-Response problem_response(int status, std::string_view detail, bool protobuf = false) {
-  ReplyOptions opts;
-  opts.protobuf = protobuf;
-  return from_reply(problem(status, detail, opts));
-}
 
 Response json_response(const json::value& v, int status = 200) { return Response::json(json::serialize(v), status); }
 
@@ -71,53 +46,7 @@ using rest::parse_decimal;
 
 std::string hex_text(std::span<const std::uint8_t> bytes) { return core::hex_bytes(bytes); }
 
-std::string timestamp_text(WallTime t) {
-  std::string out;
-  detail::append_timestamp(out, detail::to_unix_time(t));
-  if (out.size() >= 2 && out.front() == '"') out = out.substr(1, out.size() - 2);
-  return out;
-}
 
-// The network of the path, or the detail of its 400 (not a number).
-std::optional<std::uint32_t> path_network(const Request& req, std::string& error) {
-  auto n = parse_decimal(req.param("net"));
-  if (!n) error = "network must be a decimal number, not '" + std::string(req.param("net")) + "'";
-  return n;
-}
-
-// The node of the path, or the detail of its 400.
-std::optional<std::uint8_t> path_node(const Request& req, bool allow_zero, std::string& error) {
-  auto n = parse_decimal(req.param("node"));
-  if (!n || *n > 127 || (*n == 0 && !allow_zero)) {
-    error = "node-ID must be " + std::string(allow_zero ? "0..127" : "1..127") + ", not '" +
-            std::string(req.param("node")) + "'";
-    return std::nullopt;
-  }
-  return static_cast<std::uint8_t>(*n);
-}
-
-// Network and node from the path for the routes the request core does not
-// serve: nullopt when fine, else the error response.
-std::optional<Response> check_net(const App& app, const Request& req, std::uint32_t& net, bool protobuf = false) {
-  std::string error;
-  auto n = path_network(req, error);
-  if (!n) return problem_response(400, error, protobuf);
-  if (*n == 0 || *n > app.config().networks.size())
-    return problem_response(404,
-                            "network " + std::to_string(*n) + " is not configured (networks are 1.." +
-                                std::to_string(app.config().networks.size()) + ")",
-                            protobuf);
-  net = *n;
-  return std::nullopt;
-}
-
-std::optional<Response> check_node(const Request& req, std::uint8_t& node, bool allow_zero, bool protobuf = false) {
-  std::string error;
-  auto n = path_node(req, allow_zero, error);
-  if (!n) return problem_response(400, error, protobuf);
-  node = *n;
-  return std::nullopt;
-}
 
 std::string state_name(const NodeInfo& n) {
   if (n.lost) return "lost";
@@ -409,7 +338,7 @@ core::Caller rest_caller(const Request& req) {
 // the 400 for one that is not a number.
 std::optional<std::uint32_t> path_network(const Request& req, Responder& respond, bool protobuf = false) {
   std::string error;
-  auto n = path_network(req, error);
+  auto n = gateway::path_network(req, error);  // route_checks.hpp, not this overload
   if (!n) respond(problem_response(400, error, protobuf));
   return n;
 }
@@ -934,7 +863,7 @@ void get_dcf(App& app, const Request& req, Responder respond) {
   const auto node = path_node(req, false, error);
   core::Command command = undecodable(core::Operation::dcf_read, 0, error, true);
   if (node) command = core::DcfRead{*node};
-  const bool as_json = contains(req.header("accept"), "application/json");
+  const bool as_json = header_contains(req.header("accept"), "application/json");
   app.requests().execute(core_request(req, *net, std::move(command)), [respond, as_json](core::Result result) {
     if (const auto* p = std::get_if<core::Problem>(&result)) return respond(from_reply(encode_problem(*p)));
     const auto* d = std::get_if<core::DcfDocument>(&result);
@@ -1048,7 +977,7 @@ void put_program(App& app, const Request& req, Responder respond) {
   const auto node = path_node(req, false, error);
   const auto number = parse_decimal(req.param("n"));
   core::Command command = undecodable(core::Operation::program, 0, error, true);
-  if (node && !contains(req.header("content-type"), "application/octet-stream")) {
+  if (node && !header_contains(req.header("content-type"), "application/octet-stream")) {
     command = undecodable(core::Operation::program, *node,
                           "the program image must be the body as application/octet-stream", false);
   } else if (node && (!number || *number == 0 || *number > 254)) {
@@ -1114,7 +1043,7 @@ void register_rest_routes(http::HttpServer& server, App& app) {
   auto json_route = [&](const char* method, std::string_view pattern, auto fn) {
     route(method, pattern, [fn](App& a2, const Request& req, Responder respond) {
       if (accepts_only_protobuf(req))
-        return respond(problem_response(406, "this resource is JSON only (application/json); no protobuf message"));
+        return respond(json_only_refusal());
       fn(a2, req, std::move(respond));
     });
   };

@@ -8,6 +8,7 @@
 
 #include "core/format.hpp"
 #include "trace/network_trace.hpp"
+#include "route_checks.hpp"
 
 namespace gateway {
 
@@ -20,16 +21,12 @@ using trace::NetworkTrace;
 
 // The network of the path: its tap, or the problem to answer.
 std::shared_ptr<NetworkTrace> path_tap(App& app, const Request& req, Response& problem) {
-  const auto n = core::parse_decimal(req.param("net"));
-  if (!n) {
-    problem = Response::problem(400, "network must be a decimal number, not '" + std::string(req.param("net")) + "'");
+  std::uint32_t net = 0;
+  if (auto err = check_net(app, req, net)) {
+    problem = std::move(*err);
     return nullptr;
   }
-  auto tap = app.frame_tap(*n);
-  if (!tap)
-    problem = Response::problem(404, "network " + std::to_string(*n) + " is not configured (networks are 1.." +
-                                         std::to_string(app.config().networks.size()) + ")");
-  return tap;
+  return app.frame_tap(net);  // every configured network has one
 }
 
 // One trace WebSocket client: its filter and bounded queue, fed by the tap.
