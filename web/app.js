@@ -5,6 +5,7 @@
 // EDS files and devices and must never be interpreted as HTML.
 
 import { setupTrace } from './trace.js';
+import { hex, retryDelay } from './util.js';
 import { createCharts, formatScaled } from './charts.js';
 
 const TOKEN_KEY = 'canopen-gateway.token';
@@ -64,7 +65,6 @@ function el(tag, attrs = {}, ...children) {
 }
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
-const hex = (n, digits) => Number(n).toString(16).toUpperCase().padStart(digits, '0');
 const keyOf = (index, sub) => `${hex(index, 4)}:${sub}`;
 
 function fmtAge(ms) {
@@ -503,8 +503,7 @@ function connectWs() {
       try { await api('GET', '/gateway'); } catch (e) { if (e.status === 401) return; }
     }
     state.wsRetry++;
-    const delay = Math.min(10_000, 500 * 2 ** Math.min(state.wsRetry, 5));
-    wsTimer = setTimeout(connectWs, delay);
+    wsTimer = setTimeout(connectWs, retryDelay(state.wsRetry));
   };
 }
 

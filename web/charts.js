@@ -14,6 +14,8 @@
 // state events, and draw() from its render tick; nothing here touches the
 // DOM outside the value cards and the node panel's window selector.
 
+import { hex, csvField } from './util.js';
+
 export const WINDOWS = [[60, '1 min'], [600, '10 min'], [3600, '1 h'], [21600, '6 h'], [86400, '24 h']];
 export const DEFAULT_WINDOW = 600;
 // Live buckets kept per object. Live samples are bucketed, so a fast PDO adds
@@ -27,7 +29,6 @@ const TIME_INCRS = [1, 2, 5, 10, 15, 30, 60, 120, 300, 600, 900, 1800, 3600, 720
 
 export const resolutionOf = (w) => (w <= 600 ? 1 : w <= 3600 ? 10 : 60);
 
-const hex = (n, d) => Number(n).toString(16).toUpperCase().padStart(d, '0');
 const keyOf = (index, sub) => `${hex(index, 4)}:${sub}`;
 
 // ---------------------------------------------------------------- units
@@ -375,7 +376,6 @@ export function createCharts({ api, el, download, nodeState, startedAt, onChange
 
   // ------------------------------------------------------------ CSV
 
-  const csvField = (s) => (/[",\r\n]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s);
 
   function csv(key, name) {
     const scale = scaleOf(node, key);

@@ -11,6 +11,8 @@
 //
 // The DOM is built with textContent only (decoded texts come from the bus).
 
+import { csvField, hex, retryDelay } from './util.js';
+
 const BUFFER_MAX = 10_000;  // frames kept for the view and the exports; the oldest go first
 const ROWS_MAX = 500;       // table rows in the DOM; older ones are removed
 const LOAD_POLL_MS = 2000;
@@ -26,7 +28,7 @@ const SERVICE_SHORT = { 'error-control': 'err. control' };
 const serviceText = (svc) => SERVICE_SHORT[svc] || (svc === 'other' ? 'other' : svc.toUpperCase());
 
 const pad = (n, w = 2) => String(n).padStart(w, '0');
-const hexId = (f) => f.id.toString(16).toUpperCase().padStart(f.ext ? 8 : 3, '0');
+const hexId = (f) => hex(f.id, f.ext ? 8 : 3);
 const dlcOf = (f) => (f.rtr ? 'R' : String(f.data.length / 2));
 
 // "1A0-1FF, 701" (hex COB-IDs, optional 0x or h) -> [[416, 511], [1793, 1793]];
@@ -68,10 +70,6 @@ class Ring {
   filter(fn) { const out = []; for (let i = 0; i < this.length; i++) if (fn(this.at(i))) out.push(this.at(i)); return out; }
 }
 
-const csvField = (v) => {
-  const s = v === undefined || v === null ? '' : String(v);
-  return /[",\n\r]/.test(s) ? `"${s.replaceAll('"', '""')}"` : s;
-};
 export function csvLine(f) {
   return [f.t, f.dir, hexId(f), f.node ?? '', f.service, dlcOf(f), f.data.toUpperCase(), f.decoded].map(csvField).join(',');
 }
@@ -251,8 +249,7 @@ export function setupTrace(ctx) {
         }
       }
       t.retry++;
-      const delay = Math.min(10_000, 500 * 2 ** Math.min(t.retry, 5));
-      t.timer = setTimeout(connect, delay);
+      t.timer = setTimeout(connect, retryDelay(t.retry));
     };
   }
 

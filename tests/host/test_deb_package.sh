@@ -60,8 +60,10 @@ cat > "$T/expected" <<EOF
 /usr/share/canopen-gateway/eds/cia402-drive.eds
 /usr/share/canopen-gateway/gateway.example.yaml
 /usr/share/canopen-gateway/web/app.js
+/usr/share/canopen-gateway/web/charts.js
 /usr/share/canopen-gateway/web/index.html
 /usr/share/canopen-gateway/web/trace.js
+/usr/share/canopen-gateway/web/util.js
 /usr/share/doc/canopen-gateway/changelog.gz
 /usr/share/doc/canopen-gateway/copyright
 /usr/share/lintian/overrides/canopen-gateway
