@@ -19,13 +19,13 @@ void BusLoad::advance(Clock::time_point now) {
   if (b <= current_) return;
   // Buckets skipped (no frames) are emptied, at most all of them.
   for (std::int64_t i = current_ + 1; i <= b && i <= current_ + static_cast<std::int64_t>(kBuckets); ++i)
-    bits_[static_cast<std::size_t>(i % kBuckets)] = 0;
+    bits_[slot(i)] = 0;
   current_ = b;
 }
 
 void BusLoad::add_bits(std::uint32_t bits, Clock::time_point now) {
   advance(now);
-  bits_[static_cast<std::size_t>(current_ % kBuckets)] += bits;
+  bits_[slot(current_)] += bits;
 }
 
 std::optional<double> BusLoad::percent(std::chrono::milliseconds window, Clock::time_point now) const {
@@ -36,7 +36,7 @@ std::optional<double> BusLoad::percent(std::chrono::milliseconds window, Clock::
   // Buckets b-want+1 .. b: the full ones before and the current, partly elapsed.
   std::uint64_t sum = 0;
   for (std::int64_t i = b - want + 1; i <= b; ++i)
-    if (i <= current_ && i > current_ - static_cast<std::int64_t>(kBuckets)) sum += bits_[static_cast<std::size_t>(i % kBuckets)];
+    if (i <= current_ && i > current_ - static_cast<std::int64_t>(kBuckets)) sum += bits_[slot(i)];
   const auto bucket_start = Clock::time_point(b * kBucket);
   auto span = std::chrono::duration<double>((want - 1) * kBucket + (now - bucket_start));
   // Not yet running for the whole window: the time it has run.

@@ -50,6 +50,14 @@ class BusLoad {
   static constexpr std::chrono::milliseconds kBucket{100};
   static constexpr std::size_t kBuckets = 100;  // 10 s
   void advance(Clock::time_point now);
+  // The slot of bits_ for a bucket number. percent() asks for buckets before
+  // the clock's epoch (negative) when the steady clock is young, as in UML
+  // right after boot: a floor modulo keeps them in range and apart from the
+  // buckets that hold frames.
+  static std::size_t slot(std::int64_t bucket) {
+    constexpr auto n = static_cast<std::int64_t>(kBuckets);
+    return static_cast<std::size_t>((bucket % n + n) % n);
+  }
 
   std::uint32_t bitrate_;
   std::array<std::uint64_t, kBuckets> bits_{};

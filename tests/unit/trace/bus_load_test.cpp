@@ -49,6 +49,19 @@ TEST(BusLoad, YoungMeterUsesItsAge) {
   EXPECT_NEAR(*load.percent(10s, start + 2s), 54.0, 1.0);
 }
 
+// A steady clock under 10 s old (a gateway started right after boot, as in
+// user-mode Linux): the 10 s window reaches before the clock's epoch, and
+// those buckets must not alias the ones that hold the frames (they did, and
+// counted each frame twice).
+TEST(BusLoad, MeterStartedInTheClocksFirstSecondsCountsEachFrameOnce) {
+  const auto start = std::chrono::steady_clock::time_point(500ms);
+  BusLoad load(125000, start);
+  const auto f = *canopen::can::parse_frame("185#0102030405060708");
+  for (int i = 0; i < 500; ++i) load.add(f, start + std::chrono::microseconds(2000) * i);  // 1 s
+  EXPECT_NEAR(*load.percent(10s, start + 1s), 54.0, 1.0);
+  EXPECT_NEAR(*load.percent(1s, start + 1s), 54.0, 1.0);
+}
+
 TEST(BusLoad, UnknownBitRateIsNoNumber) {
   BusLoad load(0, std::chrono::steady_clock::time_point{});
   load.add(Frame{}, std::chrono::steady_clock::time_point(1s));
