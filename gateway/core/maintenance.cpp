@@ -213,7 +213,7 @@ void RequestCore::node_store(Context& c, const NodeStore& cmd) {
   r.node = cmd.node;
   r.index = index;
   r.sub = 1;
-  r.on_done = [this, run, written, index, t0 = net_.now()](canopen::sdo::TransferResult&& res) {
+  r.on_done = [this, run, written, t0 = net_.now()](canopen::sdo::TransferResult&& res) {
     sdo_finished(t0);
     if (!res.ok()) {
       // 422 with the abort when the device refuses (e.g. 08000020h: cannot store).

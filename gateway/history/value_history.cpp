@@ -121,7 +121,7 @@ void ValueHistory::record(std::uint32_t net, std::uint8_t node, std::uint16_t in
     bk->min = std::min(bk->min, f);
     bk->max = std::max(bk->max, f);
     if (bk->count < std::numeric_limits<std::uint16_t>::max()) ++bk->count;
-    const double mean = bk->mean;
+    const auto mean = static_cast<double>(bk->mean);
     bk->mean = static_cast<float>(mean + (*x - mean) / bk->count);
   }
 }

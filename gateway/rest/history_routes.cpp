@@ -33,7 +33,7 @@ std::optional<std::uint32_t> parse_hex_digits(std::string_view s, std::size_t di
 double tidy(float f) {
   char buf[32];
   const auto r = std::to_chars(buf, buf + sizeof buf, f);
-  double d = f;
+  double d = static_cast<double>(f);
   std::from_chars(buf, r.ptr, d);
   return d;
 }

@@ -14,6 +14,10 @@ target_link_libraries(gateway_rest_parse PUBLIC canopen_pdo canopen_od gateway_m
 file(READ ${CMAKE_CURRENT_LIST_DIR}/openapi.json GATEWAY_OPENAPI_JSON)
 set_property(DIRECTORY APPEND PROPERTY CMAKE_CONFIGURE_DEPENDS ${CMAKE_CURRENT_LIST_DIR}/openapi.json)
 configure_file(${CMAKE_CURRENT_LIST_DIR}/openapi_document.cpp.in ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp @ONLY)
+# One literal of ~170 KB: over the 65,536 characters the standard asks
+# compilers to support, which GCC and Clang both handle; Clang's -Wpedantic says so.
+set_source_files_properties(${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp
+  PROPERTIES COMPILE_OPTIONS "$<$<CXX_COMPILER_ID:Clang>:-Wno-overlength-strings>")
 
 add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp

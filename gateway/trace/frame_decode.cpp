@@ -13,10 +13,10 @@ namespace {
 using canopen::can::Frame;
 using core::hex_number;
 
-std::uint16_t u16(const Frame& f, int at) {
+std::uint16_t u16(const Frame& f, std::size_t at) {
   return static_cast<std::uint16_t>(f.data[at] | f.data[at + 1] << 8);
 }
-std::uint32_t u32(const Frame& f, int at) {
+std::uint32_t u32(const Frame& f, std::size_t at) {
   return static_cast<std::uint32_t>(f.data[at]) | static_cast<std::uint32_t>(f.data[at + 1]) << 8 |
          static_cast<std::uint32_t>(f.data[at + 2]) << 16 | static_cast<std::uint32_t>(f.data[at + 3]) << 24;
 }

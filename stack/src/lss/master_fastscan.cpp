@@ -12,7 +12,7 @@ namespace {
 // The next part after `p` that is not skipped; nullopt when p is the last.
 std::optional<std::uint8_t> next_part(const FastscanRequest& r, int p) {
   for (int q = p + 1; q < 4; ++q)
-    if (r.parts[q] != PartScan::Skip) return static_cast<std::uint8_t>(q);
+    if (r.parts[static_cast<std::size_t>(q)] != PartScan::Skip) return static_cast<std::uint8_t>(q);
   return std::nullopt;
 }
 

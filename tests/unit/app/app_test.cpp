@@ -104,8 +104,8 @@ TEST(AppDemo, SimulatedDevicesBootAreStartedAndSendDecodedPdos) {
 // A consumer that wants protobuf (a WebSocket client with ?format=protobuf)
 // gets it for PDOs from the next event on.
 TEST(AppDemo, PdosCarryProtobufWhileAConsumerWantsIt) {
+  bool want = false;  // before the rig: App::stop() in its destructor still asks
   DemoRig rig;
-  bool want = false;
   rig.app->set_protobuf_demand([&] { return want; });
   ASSERT_TRUE(rig.run_until([&] { return operational(rig.app->cache(), 5); }));
   auto tpdos_with_binary = [&] {

@@ -274,7 +274,7 @@ struct Rig {
     p.set_timestamp(now);
     auto* m = p.add_metrics();
     m->set_name(std::string(name));
-    m->set_datatype(type);
+    m->set_datatype(static_cast<std::uint32_t>(type));
     if (type == pb::Int64 || type == pb::UInt64)
       m->set_long_value(value);
     else

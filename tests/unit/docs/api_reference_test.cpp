@@ -219,7 +219,8 @@ std::vector<fs::path> user_documents() {
 // GitHub's anchor of a heading: lower case, punctuation dropped, spaces to '-'.
 std::string anchor(const std::string& heading) {
   std::string out;
-  for (unsigned char c : heading) {
+  for (char ch : heading) {
+    const auto c = static_cast<unsigned char>(ch);
     if (std::isalnum(c) || c == '-' || c == '_') out += static_cast<char>(std::tolower(c));
     else if (c == ' ') out += '-';
     else if (c >= 0x80) out += static_cast<char>(c);

@@ -21,7 +21,8 @@ std::string bytes(std::initializer_list<int> b) {
 std::string hex(std::string_view s) {
   static const char* d = "0123456789abcdef";
   std::string out;
-  for (unsigned char c : s) {
+  for (char ch : s) {
+    const auto c = static_cast<unsigned char>(ch);
     out += d[c >> 4];
     out += d[c & 15];
     out += ' ';

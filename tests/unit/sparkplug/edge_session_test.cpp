@@ -216,11 +216,12 @@ TEST(EdgeSession, SeqIsOneCounterThatWrapsAt255) {
   EXPECT_EQ(r.take().size(), 4U);  // 2 SUBSCRIBEs, NBIRTH seq 0, DBIRTH seq 1
   std::vector<std::uint64_t> seqs;
   for (int i = 0; i < 300; ++i) {
-    const Update u[] = {{0, std::uint64_t(i), kT0 + i}};
+    const auto ms = static_cast<std::uint64_t>(i);
+    const Update u[] = {{0, ms, kT0 + ms}};
     if (i % 2)
-      r.session.device_data(r.out, "d1", u, kT0 + i);
+      r.session.device_data(r.out, "d1", u, kT0 + ms);
     else
-      r.session.node_data(r.out, u, kT0 + i);
+      r.session.node_data(r.out, u, kT0 + ms);
   }
   for (const auto& o : r.take()) seqs.push_back(parse(o.payload).seq());
   ASSERT_EQ(seqs.size(), 300U);

@@ -29,7 +29,8 @@ Traced traced(const char* text, std::int64_t ns, Direction d = Direction::Rx) {
 std::string hex(const std::string& bytes) {
   static const char* digits = "0123456789abcdef";
   std::string s;
-  for (unsigned char c : bytes) {
+  for (char ch : bytes) {
+    const auto c = static_cast<unsigned char>(ch);
     s.push_back(digits[c >> 4]);
     s.push_back(digits[c & 15]);
   }
