@@ -780,10 +780,12 @@ TEST_F(MqttPublisherTest, TlsWithServerVerification) {
   c.ca_file = D + "/other.pem";
   c.queue.dir = queue_dir_.path() / "q2";
   io_.call([&] {
-    pub_ = std::make_unique<MqttPublisher>(io_.io(), c, log_);
+    pub_ = std::make_unique<MqttPublisher>(io_.io(), c, captured_log_);
     pub_->start();
   });
-  std::this_thread::sleep_for(1500ms);
+  // Waits for the failed handshake itself (logged once), not for a time.
+  const auto log_text = [&] { return io_.call([&] { return captured_.text(); }); };
+  EXPECT_TRUE(eventually([&] { return log_text().find("failed: ") != std::string::npos; }, 10s)) << log_text();
   EXPECT_FALSE(counters().connected);
   EXPECT_EQ(counters().connects, 0u);
 }
