@@ -7,6 +7,7 @@ set -euo pipefail
 PACKAGES=(
   # toolchain
   build-essential cmake ninja-build ccache pkg-config git clang libclang-rt-14-dev
+  lld  # links the Clang builds (sanitizers, fuzzing) ~4x faster than ld.bfd
   # libraries (Boost 1.81 from Debian's versioned packages; never libboost-all-dev, which is 1.74)
   libboost1.81-dev libboost-json1.81-dev libboost-url1.81-dev
   libpaho-mqtt-dev libpaho-mqttpp-dev  # the MQTT tests' reference client only

@@ -8,7 +8,8 @@ add_test(NAME browser.dashboard
          COMMAND bash ${CMAKE_CURRENT_LIST_DIR}/run.sh $<TARGET_FILE:canopen-gateway> ${CMAKE_BINARY_DIR}/artifacts)
 set_tests_properties(browser.dashboard PROPERTIES
   LABELS "system;browser"
-  RUN_SERIAL ON
+  RESOURCE_LOCK host_processes
+  COST 900
   TIMEOUT 300
   SKIP_RETURN_CODE 77
   ENVIRONMENT "DASHBOARD_TOKEN_TEST=1")
