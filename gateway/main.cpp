@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <pthread.h>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -210,6 +211,17 @@ int run(const gateway::CliOptions& opts) {
     io.stop();
   });
   io.run();
+  // Stopping: a second SIGTERM (timeout(1) and systemd signal the process
+  // group as well as the process) must not turn the clean stop into a kill
+  // once the signal_set is gone and the default action is back.
+  sigset_t stopping;
+  sigemptyset(&stopping);
+  sigaddset(&stopping, SIGINT);
+  sigaddset(&stopping, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stopping, nullptr);  // covers the moment between the next two lines
+  signals.clear();
+  std::signal(SIGINT, SIG_IGN);
+  std::signal(SIGTERM, SIG_IGN);
   ascii.reset();
   app.reset();
   http.reset();

@@ -6,7 +6,9 @@
 #     it came from (item 6);
 #  2. --demo with tokens configured requires them (item 11);
 #  3. the seq of network 1 continues across a clean restart without a gap,
-#     and after kill -9 no number comes twice (item 4).
+#     and after kill -9 no number comes twice (item 4);
+#  4. more SIGTERMs while it stops (timeout(1) and systemd also signal the
+#     process group) still end in a clean stop, exit 0.
 # On the host: the gateway's simulated network, a real mosquitto.
 TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
 export TMPDIR
@@ -128,3 +130,17 @@ sys.exit(0 if ok else 1)
 PY
 pass "seq continues across clean restarts and never repeats after kill -9"
 stop_mosquitto
+
+# ---- 4: SIGTERM again and again while stopping ------------------------------
+for i in 1 2 3; do
+  GW_LOG=$T/term$i.log
+  "$GATEWAY" --demo --http 127.0.0.1:0 > "$GW_LOG" 2>&1 &
+  GW_PID=$!
+  wait_for "$GW_LOG" "canopen-gateway started" 20
+  kill -TERM "$GW_PID"
+  while kill -TERM "$GW_PID" 2>/dev/null; do :; done
+  rc=0; wait "$GW_PID" || rc=$?
+  [ "$rc" -eq 0 ] || fail "exit $rc with SIGTERMs during the stop (run $i), expected 0"
+  grep -q "stopped" "$GW_LOG" || fail "no 'stopped' line (run $i)"
+done
+pass "SIGTERMs during the stop: a clean stop, exit 0 (3 runs)"
