@@ -2,10 +2,10 @@
 // flags), opens every CAN network (or the simulated demo network) and runs
 // everything on one io_context: the CANopen stack, MQTT publishing and the
 // HTTP/WebSocket server. See gateway/app/app.hpp.
+#include <pthread.h>
 #include <unistd.h>
 
 #include <csignal>
-#include <pthread.h>
 #include <cstdio>
 #include <filesystem>
 #include <string>

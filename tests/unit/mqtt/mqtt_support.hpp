@@ -40,6 +40,13 @@ constexpr const char* kMosquitto = "/usr/sbin/mosquitto";
 
 inline bool have_mosquitto() { return ::access(kMosquitto, X_OK) == 0; }
 
+// A client's log (the publisher's or the Sparkplug edge client's) says the
+// broker refused its credentials in a CONNACK: MQTT 5 reason 134 "bad user
+// name or password" or 135 "not authorized" (mosquitto's answer).
+inline bool says_credentials_refused(const std::string& log) {
+  return log.find("refused (code 134)") != std::string::npos || log.find("refused (code 135)") != std::string::npos;
+}
+
 // A broker that takes only TLS and a password (the TLS tests): writes
 // cert.pem/key.pem (self-signed for 127.0.0.1, made with openssl) and a
 // mosquitto password file with `user` in `dir`, and returns the
