@@ -20,7 +20,6 @@
 #include <boost/asio/steady_timer.hpp>
 #include <boost/asio/write.hpp>
 
-#include "canopen/json_value.hpp"
 #include "ascii/ascii_listen.hpp"
 #include "core/request_core.hpp"
 #include "log.hpp"
@@ -53,10 +52,10 @@ std::optional<Listen> parse_listen(const std::string& text) {
   return l;
 }
 
-// The core's type and JSON value for the bytes a write command parsed: the
-// numeric datatypes typed (the core checks them against the EDS limits and
-// the audit line shows the number), everything else as the bytes themselves.
-std::pair<canopen::DataType, boost::json::value> core_value(Datatype t, const canopen::Bytes& data) {
+// The core's typed value for the bytes a write command parsed: the numeric
+// datatypes typed (the core checks them against the EDS limits and the
+// audit line shows the number), everything else as the bytes themselves.
+canopen::Value core_value(Datatype t, const canopen::Bytes& data) {
   using DT = canopen::DataType;
   DT type = DT::Domain;
   switch (t) {
@@ -79,11 +78,8 @@ std::pair<canopen::DataType, boost::json::value> core_value(Datatype t, const ca
     default: type = DT::Domain; break;  // vs, us, d, hex: the bytes exactly as given
   }
   auto v = canopen::decode(type, data);
-  if (!v) {
-    type = DT::Domain;
-    v = canopen::Value::of_bytes(DT::Domain, data);
-  }
-  return {type, canopen::value_to_json(*v)};
+  if (!v) return canopen::Value::of_bytes(DT::Domain, data);
+  return std::move(*v);
 }
 
 asio::ip::tcp::endpoint tcp_endpoint(const Protocol::endpoint& ep) {
@@ -289,9 +285,8 @@ class Session : public std::enable_shared_from_this<Session> {
             w.node = line.node;
             w.index = c.index;
             w.sub = c.sub;
-            auto [type, value] = core_value(c.type, c.data);
-            w.type = type;
-            w.value = std::move(value);
+            w.value = core_value(c.type, c.data);
+            w.type = std::get<canopen::Value>(w.value).type;
             w.timeout = std::chrono::milliseconds(defaults_.sdo_timeout_ms);
             w.block = defaults_.sdo_block;
             run(line.net, std::move(w), [seq](Session& s, core::Result res) { s.out_ += ok_or_problem(seq, res); });

@@ -10,6 +10,7 @@
 
 #include "canopen/eds/eds.hpp"
 #include "canopen/sdo/abort.hpp"
+#include "core/core_helpers.hpp"
 #include "core/format.hpp"
 #include "core/request_core.hpp"
 
@@ -17,16 +18,8 @@ namespace gateway::core {
 
 namespace {
 
-std::string requester(std::string_view who) { return who.empty() ? std::string("anonymous") : std::string(who); }
-
-std::uint64_t queue_key(std::uint32_t network, std::uint8_t node) { return std::uint64_t{network} << 8 | node; }
-
-Problem problem(int status, std::string detail) {
-  Problem p;
-  p.status = status;
-  p.detail = std::move(detail);
-  return p;
-}
+using detail::problem;
+using detail::requester;
 
 // CiA 301 7.5.2.13 / 7.5.2.14: the signatures written to sub 1 ("save" and
 // "load" read as UNSIGNED32, little-endian on the bus).
@@ -83,7 +76,7 @@ std::optional<Problem> RequestCore::maintenance_start(const Context& c, std::uin
     audit_(line + ": " + std::to_string(p->status) + " " + p->detail);
     return p;
   }
-  auto& busy = maintenance_busy_[queue_key(c.network, node)];
+  auto& busy = maintenance_busy_[detail::sdo_queue_key(c.network, node)];
   if (busy) {
     ++counters_.maintenance[kind][Counters::busy];
     auto p = problem(409, "another DCF transfer, store/restore or program download runs for node " +
@@ -100,7 +93,7 @@ std::optional<Problem> RequestCore::maintenance_start(const Context& c, std::uin
 }
 
 void RequestCore::maintenance_end(const MaintenanceRun& run, Result result, const std::string& outcome) {
-  maintenance_busy_.erase(queue_key(run.c.network, run.node));
+  maintenance_busy_.erase(detail::sdo_queue_key(run.c.network, run.node));
   place_freed(run.c.network, run.node, run.c.caller.key);
   const auto* p = std::get_if<Problem>(&result);
   if (p != nullptr && p->status == 409) {

@@ -1,11 +1,7 @@
 #include "core/request.hpp"
 
-#include <boost/json/object.hpp>
-#include <boost/json/serialize.hpp>
-
 #include "canopen/sdo/abort.hpp"
-#include "core/format.hpp"
-#include "http_status.hpp"
+#include "core/operation.hpp"
 
 namespace gateway::core {
 
@@ -20,20 +16,7 @@ std::string abort_detail(std::uint32_t code, std::string_view context) {
   return d;
 }
 
-std::string utf8(std::string_view s) { return canopen::is_utf8(s) ? std::string(s) : canopen::latin1_to_utf8(s); }
-
 }  // namespace
-
-std::string problem_json(const Problem& p, std::string_view correlation_id) {
-  boost::json::object o;
-  o["type"] = p.type.empty() ? std::string("about:blank") : utf8(p.type);
-  o["title"] = p.title.empty() ? std::string(reason_phrase(p.status)) : utf8(p.title);
-  o["status"] = p.status;
-  o["detail"] = utf8(p.detail);
-  if (p.abort_code) o["abortCode"] = abort_code_text(*p.abort_code);
-  if (!correlation_id.empty()) o["correlationId"] = utf8(correlation_id);
-  return boost::json::serialize(o);
-}
 
 Problem sdo_problem(std::error_code ec, bool remote, std::string_view context) {
   const std::uint32_t code = canopen::to_abort_code(ec);
@@ -55,57 +38,19 @@ Problem sdo_problem(std::error_code ec, bool remote, std::string_view context) {
 
 
 Role required_role(Operation op, std::optional<canopen::NmtCommand> nmt) {
-  switch (op) {
-    case Operation::sdo_read:
-      return Role::Viewer;
-    case Operation::nmt:
-      // Reset node / reset communication (CiA 301 7.2.8.3.1) need admin; a
-      // command not known yet is treated as the most privileged.
-      return !nmt || *nmt == canopen::NmtCommand::ResetNode || *nmt == canopen::NmtCommand::ResetCommunication
-                 ? Role::Admin
-                 : Role::Operator;
-    case Operation::lss:
-      return Role::Admin;  // contract "LSS master (CiA 305), REST (role admin)"
-    // contract "Remote configuration and maintenance (role admin unless noted)"
-    case Operation::config_read:
-    case Operation::dcf_read:
-      return Role::Viewer;
-    case Operation::store:
-      return Role::Operator;
-    case Operation::config_write:
-    case Operation::dcf_write:
-    case Operation::program:
-      return Role::Admin;
-    case Operation::sdo_write:
-    case Operation::rpdo_write:
-    case Operation::sync:
-    case Operation::pdo_config_read:
-      return Role::Operator;
-  }
-  return Role::Admin;
+  // Reset node / reset communication (CiA 301 7.2.8.3.1) need admin; a
+  // command not known yet is treated as the most privileged.
+  if (op == Operation::nmt && (!nmt || *nmt == canopen::NmtCommand::ResetNode ||
+                               *nmt == canopen::NmtCommand::ResetCommunication))
+    return Role::Admin;
+  return describe(op).role;
 }
 
-namespace {
-struct RoleOf {
-  Role operator()(const SdoRead&) const { return required_role(Operation::sdo_read); }
-  Role operator()(const SdoWrite&) const { return required_role(Operation::sdo_write); }
-  Role operator()(const Nmt& n) const { return required_role(Operation::nmt, n.command); }
-  Role operator()(const RpdoWrite&) const { return required_role(Operation::rpdo_write); }
-  Role operator()(const Sync&) const { return required_role(Operation::sync); }
-  Role operator()(const PdoConfigRead&) const { return required_role(Operation::pdo_config_read); }
-  Role operator()(const Undecodable& u) const { return required_role(u.operation); }
-  Role operator()(const NodeConfigRead&) const { return required_role(Operation::config_read); }
-  Role operator()(const NodeConfigWrite&) const { return required_role(Operation::config_write); }
-  Role operator()(const NodeEdsWrite&) const { return required_role(Operation::config_write); }
-  Role operator()(const DcfRead&) const { return required_role(Operation::dcf_read); }
-  Role operator()(const DcfApply&) const { return required_role(Operation::dcf_write); }
-  Role operator()(const NodeStore&) const { return required_role(Operation::store); }
-  Role operator()(const ProgramDownload&) const { return required_role(Operation::program); }
-  Role operator()(const auto&) const { return required_role(Operation::lss); }  // the LSS commands
-};
-}  // namespace
-
-Role required_role(const Command& command) { return std::visit(RoleOf{}, command); }
+Role required_role(const Command& command) {
+  // NMT's role depends on its command; every other one on its operation alone.
+  if (const auto* n = std::get_if<Nmt>(&command)) return required_role(Operation::nmt, n->command);
+  return required_role(operation_of(command));
+}
 
 std::string_view to_string(Transport t) {
   switch (t) {

@@ -1,10 +1,12 @@
 // The typed request core's vocabulary: who asks (Caller), what they ask for
 // (one Command), and the one answer (Result: a typed success or a Problem).
-// Every front end (REST, MQTT, later CiA 309-3 ASCII, Sparkplug B, LSS,
-// runtime configuration) decodes its wire format into a Request once,
-// hands it to RequestCore::execute (request_core.hpp) and encodes the
-// Result itself. A new operation is a new Command alternative with its
-// Result alternative; a new front end is a decoder and an encoder.
+// Every front end (REST, MQTT, WebSocket, CiA 309-3 ASCII, Sparkplug B
+// commands) decodes its wire format into a Request once, hands it to
+// RequestCore::execute (request_core.hpp) and encodes the Result itself.
+// Values are typed (canopen::Value) or literals the core types by the EDS
+// (WriteValue); no wire format's representation gets past a front end.
+// A new operation is a Command alternative, its Result alternative and its
+// descriptor (core/operation.hpp: it does not compile without one).
 //
 // Plain value types; thread safety as for any value.
 #pragma once
@@ -20,6 +22,7 @@
 #include <vector>
 
 #include "canopen/events.hpp"
+#include "canopen/literal.hpp"
 #include "canopen/lss/frames.hpp"
 #include "canopen/pdo/config_reader.hpp"
 #include "canopen/types.hpp"
@@ -68,15 +71,20 @@ struct SdoRead {
   std::optional<bool> block = std::nullopt;
 };
 
-// SDO download. The value as sent (JSON, or a protobuf Value as JSON), typed
-// by the core as `type` or the EDS/DCF entry's type and checked against its
-// limits before anything goes on the bus.
+// A value to write: typed by the front end (the ASCII interface's datatype,
+// a Sparkplug metric typed from the EDS), or a Literal as the caller wrote
+// it (REST, MQTT) that the core types by the request's `type` or the EDS/DCF
+// entry's. Never a wire format's own representation.
+using WriteValue = std::variant<canopen::Value, canopen::Literal>;
+
+// SDO download, checked against the type and the EDS/DCF limits before
+// anything goes on the bus. A typed value's type is the request's `type`.
 struct SdoWrite {
   std::uint8_t node = 0;
   std::uint16_t index = 0;
   std::uint8_t sub = 0;
   std::optional<canopen::DataType> type;
-  boost::json::value value;
+  WriteValue value;
   // How the transfer runs (CiA 309-3 `set sdo_timeout` / `set sdo_block`):
   // nullopt = the SDO client's default for the node.
   std::optional<std::chrono::milliseconds> timeout = std::nullopt;
@@ -91,13 +99,26 @@ struct Nmt {
   canopen::NmtCommand command = canopen::NmtCommand::Start;
 };
 
-// Process data to `node`'s RPDO `number`. The body as sent
-// ({"values": [{index, subIndex, value}]} or {"raw": "hex"}), typed by the
-// core against the RPDO's mapping in effect (rest_parse.hpp).
+// One value of an RPDO write, by the object it is mapped from. `invalid`:
+// what was wrong with this item as sent (answered 400, in item order, once
+// the items before it passed: the core checks them one by one).
+struct RpdoItem {
+  std::uint16_t index = 0;
+  std::uint8_t sub = 0;
+  WriteValue value;
+  std::string invalid;
+};
+
+// Process data to `node`'s RPDO `number`: values by object, or the raw data;
+// typed and checked by the core against the RPDO's mapping in effect and
+// the EDS limits (core/rpdo_values.hpp). `invalid`: what was wrong with the
+// body as a whole (answered 400 once the RPDO is known to be in use).
 struct RpdoWrite {
   std::uint8_t node = 0;
   std::uint16_t number = 0;
-  std::string body;
+  std::vector<RpdoItem> values;  // empty when `raw` is set
+  std::optional<canopen::Bytes> raw;
+  std::string invalid;
 };
 
 // One SYNC on the network, with the counter when given (1..240).
@@ -411,14 +432,6 @@ using Result = std::variant<SdoValue, NmtSent, RpdoSent, SyncSent, PdoConfigRepo
 // (05040000h) 504; other local failures 502. All carry the abort code, and
 // the CiA 301 text as detail (": " and `context` appended when given).
 Problem sdo_problem(std::error_code ec, bool remote, std::string_view context = {});
-
-// The problem+json document of `p` (RFC 9457): type ("about:blank" unless
-// given), title (the status' reason phrase unless given), status, detail,
-// abortCode ("0x06020000") when set, correlationId when not empty; text
-// that is not UTF-8 is read as Latin-1. The one JSON problem builder: REST,
-// MQTT and the HTTP server's own errors (http::Response::problem) use it;
-// the protobuf Problem (request_codec.hpp) has the same fields.
-std::string problem_json(const Problem& p, std::string_view correlation_id = {});
 
 // The role a command needs: SDO read viewer; SDO write, RPDO write, SYNC,
 // PDO configuration read and NMT start/stop/pre-operational operator; NMT

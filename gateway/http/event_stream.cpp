@@ -4,7 +4,7 @@
 #include <boost/json/serialize.hpp>
 #include <boost/json/value.hpp>
 
-#include "core/json_input.hpp"
+#include "messages/json_input.hpp"
 
 namespace gateway::http {
 
@@ -42,7 +42,7 @@ bool read_ints(const boost::json::value& v, std::uint64_t max, std::vector<T>& o
 }  // namespace
 
 bool EventFilter::parse(std::string_view text, std::string& error) {
-  const auto obj = core::parse_json_object(text, "filter", "", error);
+  const auto obj = parse_json_object(text, "filter", "", error);
   if (!obj) return false;
   std::vector<std::uint32_t> networks;
   std::vector<std::uint8_t> nodes;

@@ -1,5 +1,6 @@
 #include "http_types.hpp"
 
+#include "messages/problem_json.hpp"
 #include "core/request.hpp"
 
 namespace gateway::http {
@@ -39,7 +40,7 @@ Response Response::problem(int status, std::string_view detail) {
   Response r;
   r.status = status;
   r.content_type = "application/problem+json";
-  r.body = core::problem_json(p);
+  r.body = problem_json(p);
   return r;
 }
 

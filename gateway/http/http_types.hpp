@@ -102,7 +102,7 @@ struct Response {
 
   // RFC 9457 problem document: {"type":"about:blank","title":<reason>,
   // "status":<status>,"detail":<detail>} as application/problem+json
-  // (core::problem_json, the builder REST and MQTT replies use too).
+  // (problem_json, messages/problem_json.hpp: the builder REST and MQTT replies use too).
   static Response problem(int status, std::string_view detail);
   static Response json(std::string body, int status = 200);
 };

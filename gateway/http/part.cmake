@@ -10,7 +10,7 @@ add_library(gateway_http_core STATIC
   ${CMAKE_CURRENT_LIST_DIR}/event_stream.cpp
   ${CMAKE_CURRENT_LIST_DIR}/static_files.cpp)
 target_include_directories(gateway_http_core PUBLIC ${CMAKE_CURRENT_LIST_DIR})
-target_link_libraries(gateway_http_core PUBLIC gateway_lib Boost::headers PRIVATE gateway_core_types Boost::json canopen_options)
+target_link_libraries(gateway_http_core PUBLIC gateway_lib Boost::headers PRIVATE gateway_core_types gateway_json_wire Boost::json canopen_options)
 add_library(gateway_http STATIC ${CMAKE_CURRENT_LIST_DIR}/server.cpp ${CMAKE_CURRENT_LIST_DIR}/http_metrics.cpp)
 target_link_libraries(gateway_http
   PUBLIC gateway_http_core gateway_lib gateway_metrics Boost::headers

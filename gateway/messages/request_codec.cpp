@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "messages/problem_json.hpp"
 #include "canopen/json_value.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/sdo/abort.hpp"
@@ -307,9 +308,13 @@ canopen::Result<SdoWriteParams> parse_sdo_write(std::string_view body, bool prot
     if (!obj) return obj.error();
     return parse_sdo_write(*obj, require_address);
   }
-  SdoWriteParams p;
   pb::SdoWriteRequest m;
   if (!parse_proto(m, body)) return fail("body is not a valid SdoWriteRequest protobuf message");
+  return parse_sdo_write(m, require_address);
+}
+
+canopen::Result<SdoWriteParams> parse_sdo_write(const pb::SdoWriteRequest& m, bool require_address) {
+  SdoWriteParams p;
   if (auto e = common_from_proto(m, p)) return *e;
   if (m.has_value()) p.value = detail::proto_value_to_json(m.value());
   return complete_write(std::move(p), require_address);
@@ -382,7 +387,7 @@ Reply encode_problem(const core::Problem& p, const ReplyOptions& opts) {
   r.status = p.status;
   r.retry_after = p.retry_after;
   if (!opts.protobuf) {
-    r.body = core::problem_json(p, correlation);
+    r.body = problem_json(p, correlation);
     r.content_type = "application/problem+json";
     return r;
   }

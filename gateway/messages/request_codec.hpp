@@ -30,6 +30,10 @@
 #include "canopen/types.hpp"
 #include "core/request.hpp"
 
+namespace canopen::gateway::v1 {
+class SdoWriteRequest;
+}
+
 namespace gateway {
 
 // One reply as the transports send it: HTTP status semantics and a body
@@ -83,6 +87,9 @@ canopen::Result<NmtParams> parse_nmt(std::string_view body, bool protobuf);
 canopen::Result<boost::json::object> parse_json_body(std::string_view body);
 canopen::Result<SdoReadParams> parse_sdo_read(const boost::json::object& body, bool require_address = true);
 canopen::Result<SdoWriteParams> parse_sdo_write(const boost::json::object& body, bool require_address = true);
+// The same from a decoded protobuf message (REST puts the path's address into it first).
+canopen::Result<SdoWriteParams> parse_sdo_write(const canopen::gateway::v1::SdoWriteRequest& message,
+                                                bool require_address = true);
 canopen::Result<NmtParams> parse_nmt(const boost::json::object& body);
 
 // "start" "stop" "preop" "reset-node" "reset-comm"

@@ -1,3 +1,4 @@
+#include "canopen/json_value.hpp"
 #include "mqtt/mqtt_requests.hpp"
 
 #include <boost/json/parse.hpp>
@@ -41,7 +42,7 @@ core::Command decode_command(core::Operation op, std::uint8_t node, std::string_
       auto p = protobuf ? parse_sdo_write(body, true) : *object ? parse_sdo_write(**object) : object->error();
       if (!p) return bad(p.error());
       opts.correlation_id = p->correlation_id;
-      return core::SdoWrite{node, *p->index, *p->sub, p->type, std::move(p->value)};
+      return core::SdoWrite{node, *p->index, *p->sub, p->type, canopen::literal_from_json(p->value)};
     }
     default: {
       auto p = protobuf ? parse_nmt(body, true) : *object ? parse_nmt(**object) : object->error();

@@ -382,7 +382,7 @@ core::Command sdo_command(bool write, const Request& req, std::uint8_t node, Rep
     m.set_index(*index);
     m.set_sub_index(*sub);
     if (type) m.set_type(std::string(req.query_param("type").value_or("")));
-    params = parse_sdo_write(m.SerializeAsString(), true);
+    params = parse_sdo_write(m);
   } else {
     boost::system::error_code ec;
     auto body = json::parse(req.body, ec);
@@ -398,14 +398,14 @@ core::Command sdo_command(bool write, const Request& req, std::uint8_t node, Rep
       canopen::gateway::v1::SdoWriteRequest m;
       if (!google::protobuf::util::JsonStringToMessage(json::serialize(o), &m).ok())
         return undecodable(op, node, "the body is not an SDO write request {\"value\": ..., \"type\": ...}", false);
-      params = parse_sdo_write(m.SerializeAsString(), true);
+      params = parse_sdo_write(m);
     } else {
       params = parse_sdo_write(o);
     }
   }
   if (!params) return undecodable(op, node, params.error().detail, false);
   opts.correlation_id = params->correlation_id;
-  return core::SdoWrite{node, *params->index, *params->sub, params->type, std::move(params->value)};
+  return core::SdoWrite{node, *params->index, *params->sub, params->type, canopen::literal_from_json(params->value)};
 }
 
 // Executes a decoded request and answers with its result (SDO and NMT:
@@ -470,7 +470,7 @@ void rpdo(App& app, const Request& req, Responder respond) {
     command = undecodable(core::Operation::rpdo_write, *node,
                           "RPDO number must be 1..512, not '" + std::string(req.param("n")) + "'", true);
   else if (node)
-    command = core::RpdoWrite{*node, static_cast<std::uint16_t>(*number), req.body};
+    command = rest::decode_rpdo_body(*node, static_cast<std::uint16_t>(*number), req.body);
   app.requests().execute(core_request(req, *net, std::move(command)),
                          json_result<core::RpdoSent>(std::move(respond), [](const core::RpdoSent& s) {
                            json::object out;

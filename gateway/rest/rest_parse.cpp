@@ -53,53 +53,55 @@ std::optional<canopen::Bytes> parse_hex(std::string_view s) {
   return out;
 }
 
-std::optional<RpdoBody> parse_rpdo_body(std::string_view body, const canopen::pdo::PdoConfig& pdo,
-                                        const canopen::od::ObjectDictionary& od, std::string_view what,
-                                        std::string& error) {
-  auto fail = [&](std::string detail) -> std::optional<RpdoBody> {
-    error = std::move(detail);
-    return std::nullopt;
-  };
+core::RpdoWrite decode_rpdo_body(std::uint8_t node, std::uint16_t number, std::string_view body) {
+  core::RpdoWrite out{node, number, {}, {}, {}};
   boost::system::error_code ec;
   auto parsed = json::parse(body, ec);
-  if (ec || !parsed.is_object()) return fail("the body must be a JSON object {\"values\": [...]} or {\"raw\": \"hex\"}");
+  if (ec || !parsed.is_object()) {
+    out.invalid = "the body must be a JSON object {\"values\": [...]} or {\"raw\": \"hex\"}";
+    return out;
+  }
   const auto& o = parsed.as_object();
-  RpdoBody out;
   if (const auto* r = o.if_contains("raw")) {
-    if (!r->is_string()) return fail("\"raw\" must be a hex string");
-    out.raw = parse_hex(r->as_string());
-    if (!out.raw) return fail("\"raw\" is not hex: '" + std::string(r->as_string()) + "'");
-    if (out.raw->size() != pdo.byte_length())
-      return fail(std::string(what) + " carries " + std::to_string(pdo.byte_length()) + " bytes, not " +
-                  std::to_string(out.raw->size()));
+    if (!r->is_string()) {
+      out.invalid = "\"raw\" must be a hex string";
+    } else if (auto raw = parse_hex(r->as_string())) {
+      out.raw = std::move(*raw);
+    } else {
+      out.invalid = "\"raw\" is not hex: '" + std::string(r->as_string()) + "'";
+    }
     return out;
   }
   const auto* vs = o.if_contains("values");
-  if (vs == nullptr || !vs->is_array() || vs->as_array().empty())
-    return fail("the body needs \"values\" (a non-empty array) or \"raw\"");
+  if (vs == nullptr || !vs->is_array() || vs->as_array().empty()) {
+    out.invalid = "the body needs \"values\" (a non-empty array) or \"raw\"";
+    return out;
+  }
   for (const auto& item : vs->as_array()) {
+    core::RpdoItem& v = out.values.emplace_back();
     const auto* it = item.if_object();
-    if (it == nullptr || !it->contains("index") || !it->contains("value"))
-      return fail("each of \"values\" must be {\"index\", \"subIndex\", \"value\"}");
+    if (it == nullptr || !it->contains("index") || !it->contains("value")) {
+      v.invalid = "each of \"values\" must be {\"index\", \"subIndex\", \"value\"}";
+      break;  // nothing after it is looked at
+    }
     const auto index = json_index(it->at("index"));
     const auto* sv = it->if_contains("subIndex");
     const auto sub = sv != nullptr ? json_sub(*sv) : std::optional<std::uint8_t>{0};
-    if (!index || !sub) return fail("malformed index or subIndex in \"values\"");
-    const canopen::pdo::MappingEntry* entry = nullptr;
-    for (const auto& e : pdo.entries)
-      if (!e.dummy && e.index == *index && e.sub == *sub) entry = &e;
-    const std::string obj = canopen::od::object_label(*index, *sub);
-    if (entry == nullptr) return fail(std::string(what) + " does not map " + obj);
-    // Type and limit errors name the type themselves: "6040h sub 0: 70000 is above 65535 (u16)".
-    auto v = canopen::value_from_json(entry->type, it->at("value"));
-    if (!v) return fail(obj + ": " + v.error().detail);
-    if (const auto* se = od.find(*index, *sub)) {
-      std::string detail;
-      if (canopen::check_limits(*v, se->low, se->high, &detail)) return fail(obj + ": " + detail);
+    if (!index || !sub) {
+      v.invalid = "malformed index or subIndex in \"values\"";
+      break;
     }
-    out.values.push_back(canopen::MappedValue{*index, *sub, entry->name, std::move(*v)});
+    v.index = *index;
+    v.sub = *sub;
+    v.value = canopen::literal_from_json(it->at("value"));
   }
   return out;
+}
+
+std::optional<RpdoBody> parse_rpdo_body(std::string_view body, const canopen::pdo::PdoConfig& pdo,
+                                        const canopen::od::ObjectDictionary& od, std::string_view what,
+                                        std::string& error) {
+  return core::typed_rpdo_values(decode_rpdo_body(0, 0, body), pdo, od, what, error);
 }
 
 // ---- LSS bodies ----------------------------------------------------------------

@@ -18,6 +18,7 @@
 #include "canopen/types.hpp"
 #include "core/format.hpp"
 #include "core/request.hpp"
+#include "core/rpdo_values.hpp"
 
 namespace gateway::rest {
 
@@ -29,16 +30,19 @@ using core::parse_decimal;
 std::optional<canopen::Bytes> parse_hex(std::string_view s);
 
 // The body of PUT .../rpdo/{n}: either values by object, or the raw data.
-struct RpdoBody {
-  std::vector<canopen::MappedValue> values;  // empty when `raw` is set
-  std::optional<canopen::Bytes> raw;
-};
+using core::RpdoBody;
 
-// Decodes {"values": [{"index", "subIndex", "value"}...]} or {"raw": "hex"}
-// against `pdo` (the node's RPDO from its EDS/DCF): every value must be
-// mapped by it, fit its type and the limits `od` gives; raw must have the
-// RPDO's length. `what` names the RPDO in errors ("node 5 RPDO1"). On
-// failure returns nullopt and sets `error` (the detail of a 400).
+// The core's command for the body {"values": [{"index", "subIndex",
+// "value"}...]} or {"raw": "hex"} of PUT .../rpdo/{n}: what is wrong with
+// its form is carried in `invalid` (the body's or one item's), for the core
+// to answer in its order (core/rpdo_values.hpp).
+core::RpdoWrite decode_rpdo_body(std::uint8_t node, std::uint16_t number, std::string_view body);
+
+// decode_rpdo_body() and the core's typing against `pdo` (the node's RPDO
+// from its EDS/DCF) in one: every value must be mapped by it, fit its type
+// and the limits `od` gives; raw must have the RPDO's length. `what` names
+// the RPDO in errors ("node 5 RPDO1"). On failure returns nullopt and sets
+// `error` (the detail of a 400).
 std::optional<RpdoBody> parse_rpdo_body(std::string_view body, const canopen::pdo::PdoConfig& pdo,
                                         const canopen::od::ObjectDictionary& od, std::string_view what,
                                         std::string& error);

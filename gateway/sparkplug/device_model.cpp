@@ -1,13 +1,11 @@
 #include "sparkplug/device_model.hpp"
 
 #include <array>
-#include <boost/json/parse.hpp>
-#include <boost/json/serialize.hpp>
 #include <cmath>
 #include <map>
 #include <set>
 
-#include "canopen/json_value.hpp"
+#include "canopen/literal.hpp"
 #include "core/format.hpp"
 #include "log.hpp"
 
@@ -147,8 +145,8 @@ Value to_sparkplug(const canopen::Value& v) {
       v.data);
 }
 
-std::variant<boost::json::value, std::string> json_for(const Value& v, canopen::DataType type) {
-  boost::json::value j;
+std::variant<canopen::Value, std::string> typed_for(const Value& v, canopen::DataType type) {
+  canopen::Literal j;
   if (std::holds_alternative<std::monostate>(v)) return std::string("a null value cannot be written");
   if (const auto* b = std::get_if<bool>(&v)) {
     j = *b;
@@ -162,25 +160,25 @@ std::variant<boost::json::value, std::string> json_for(const Value& v, canopen::
           (*u - static_cast<std::uint64_t>(kEpoch1984Ms)) / kMsPerDay > 0xFFFF)
         return std::string("DateTime " + std::to_string(*u) + " is outside what TIME_OF_DAY holds (1984-01-01 .. +65535 days)");
       const auto tod = canopen::time_of_day_from_unix_ms(static_cast<std::int64_t>(*u));
-      j = canopen::value_to_json(canopen::Value{CoType::TimeOfDay, tod});
+      j = canopen::format_value(canopen::Value{CoType::TimeOfDay, tod});  // RFC 3339, as the contract writes t
     } else {
       j = *u;
     }
   } else if (const auto* f = std::get_if<float>(&v)) {
-    j = std::isfinite(*f) ? boost::json::value(static_cast<double>(*f))
-                          : boost::json::value(std::isnan(*f) ? "nan" : (*f > 0 ? "inf" : "-inf"));
+    j = std::isfinite(*f) ? canopen::Literal(static_cast<double>(*f))
+                          : canopen::Literal(std::isnan(*f) ? "nan" : (*f > 0 ? "inf" : "-inf"));
   } else if (const auto* d = std::get_if<double>(&v)) {
-    j = std::isfinite(*d) ? boost::json::value(*d)
-                          : boost::json::value(std::isnan(*d) ? "nan" : (*d > 0 ? "inf" : "-inf"));
+    j = std::isfinite(*d) ? canopen::Literal(*d)
+                          : canopen::Literal(std::isnan(*d) ? "nan" : (*d > 0 ? "inf" : "-inf"));
   } else if (const auto* s = std::get_if<std::string>(&v)) {
-    j = boost::json::string(*s);
+    j = *s;
   } else if (const auto* bytes = std::get_if<canopen::Bytes>(&v)) {
-    j = boost::json::string(core::hex_bytes(*bytes));
+    j = core::hex_bytes(*bytes);
   }
   // The contract's reader of values does the type and range checks once.
-  auto typed = canopen::value_from_json(type, j);
+  auto typed = canopen::value_from_literal(type, j);
   if (!typed) return typed.error().detail;
-  return canopen::value_to_json(*typed);
+  return std::move(*typed);
 }
 
 DeviceModel DeviceModel::build(const Input& in) {
@@ -412,31 +410,26 @@ std::variant<core::Command, std::string> DeviceModel::command_for(const WriteCom
     return "\"" + metric.name + "\" is reported by the gateway and cannot be written";
   const ObjectRef ref = *metric.object;
   const std::string label = core::object_label(ref.index, ref.sub_index);
-  auto j = json_for(item.value, s.type);
-  if (auto* err = std::get_if<std::string>(&j)) return "\"" + metric.name + "\" (" + label + "): " + *err;
-  auto& json = std::get<boost::json::value>(j);
+  auto t = typed_for(item.value, s.type);
+  if (auto* err = std::get_if<std::string>(&t)) return "\"" + metric.name + "\" (" + label + "): " + *err;
+  auto& typed = std::get<canopen::Value>(t);
   if (low_[item.metric] || high_[item.metric]) {
-    auto typed = canopen::value_from_json(s.type, json);
     std::string detail;
-    if (typed && canopen::check_limits(*typed, low_[item.metric], high_[item.metric], &detail))
+    if (canopen::check_limits(typed, low_[item.metric], high_[item.metric], &detail))
       return "\"" + metric.name + "\" (" + label + "): " + detail;
   }
   if (s.rpdo == 0 && !s.writable) return "\"" + metric.name + "\" (" + label + ") is read-only in the EDS";
   if (s.rpdo != 0) {
-    boost::json::object v;
-    v["index"] = ref.index;
-    v["subIndex"] = ref.sub_index;
-    v["value"] = std::move(json);
-    boost::json::object body;
-    body["values"] = boost::json::array{std::move(v)};
-    return core::Command{core::RpdoWrite{node_, s.rpdo, boost::json::serialize(body)}};
+    core::RpdoWrite w{node_, s.rpdo, {}, {}, {}};
+    w.values.push_back(core::RpdoItem{ref.index, ref.sub_index, std::move(typed), {}});
+    return core::Command{std::move(w)};
   }
-  return core::Command{core::SdoWrite{node_, ref.index, ref.sub_index, s.type, std::move(json)}};
+  return core::Command{core::SdoWrite{node_, ref.index, ref.sub_index, s.type, std::move(typed)}};
 }
 
 DeviceModel::Writes DeviceModel::writes_for(std::span<const WriteCommand::Item> items) const {
   Writes out;
-  std::map<std::uint16_t, std::pair<std::size_t, boost::json::array>> rpdos;  // number -> write, its values
+  std::map<std::uint16_t, std::size_t> rpdos;  // number -> its write in out.writes
   for (const auto& item : items) {
     auto c = command_for(item);
     if (auto* reason = std::get_if<std::string>(&c)) {
@@ -445,18 +438,21 @@ DeviceModel::Writes DeviceModel::writes_for(std::span<const WriteCommand::Item> 
     }
     const ObjectRef ref = *metrics_[item.metric].object;
     auto& command = std::get<core::Command>(c);
-    const auto* rpdo = std::get_if<core::RpdoWrite>(&command);
+    auto* rpdo = std::get_if<core::RpdoWrite>(&command);
     if (rpdo == nullptr) {
       out.writes.push_back({std::move(command), {ref}});
       continue;
     }
     // Values for one RPDO go out as one frame; a repeated object: the last value.
-    auto body = boost::json::parse(rpdo->body);
-    auto& value = body.as_object()["values"].as_array().at(0);
-    auto [it, fresh] = rpdos.try_emplace(rpdo->number, out.writes.size(), boost::json::array{});
-    if (fresh) out.writes.push_back({std::move(command), {}});
-    auto& [at, values] = it->second;
-    auto& objects = out.writes[at].objects;
+    core::RpdoItem value = std::move(rpdo->values.at(0));
+    auto [it, fresh] = rpdos.try_emplace(rpdo->number, out.writes.size());
+    if (fresh) {
+      rpdo->values.clear();
+      out.writes.push_back({std::move(command), {}});
+    }
+    auto& write = out.writes[it->second];
+    auto& values = std::get<core::RpdoWrite>(write.command).values;
+    auto& objects = write.objects;
     bool replaced = false;
     for (std::size_t k = 0; k < objects.size(); ++k)
       if (objects[k] == ref) {
@@ -464,14 +460,9 @@ DeviceModel::Writes DeviceModel::writes_for(std::span<const WriteCommand::Item> 
         replaced = true;
       }
     if (!replaced) {
-      values.push_back(value);
+      values.push_back(std::move(value));
       objects.push_back(ref);
     }
-  }
-  for (auto& [number, entry] : rpdos) {
-    boost::json::object body;
-    body["values"] = std::move(entry.second);
-    std::get<core::RpdoWrite>(out.writes[entry.first].command).body = boost::json::serialize(body);
   }
   return out;
 }

@@ -83,10 +83,10 @@ std::string bus_state_name(std::uint32_t network);  // "Network 1/Bus State"
 // vs that is not UTF-8 read as Latin-1, t as DateTime (UTC ms), td as Int64
 // ms, os/d as Bytes.
 Value to_sparkplug(const canopen::Value& v);
-// A Sparkplug value (as typed_value() gave it for datatype_of(type)) as the
-// JSON the REST/MQTT contract uses for `type` (canopen/json_value.hpp),
-// range-checked for `type` (i24 in an Int32, ...). Error: the reason.
-std::variant<boost::json::value, std::string> json_for(const Value& v, canopen::DataType type);
+// A Sparkplug value (as typed_value() gave it for datatype_of(type)) as a
+// stack value of `type`, read by the REST/MQTT contract's rules for `type`
+// (canopen/literal.hpp), range-checked (i24 in an Int32, ...). Error: the reason.
+std::variant<canopen::Value, std::string> typed_for(const Value& v, canopen::DataType type);
 
 class DeviceModel {
  public:

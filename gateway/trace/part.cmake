@@ -10,5 +10,5 @@ add_library(gateway_trace STATIC
   ${CMAKE_CURRENT_LIST_DIR}/network_trace.cpp
   ${CMAKE_CURRENT_LIST_DIR}/tapped_channel.cpp)
 target_include_directories(gateway_trace PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
-target_link_libraries(gateway_trace PUBLIC canopen_core canopen_lss gateway_core_types
+target_link_libraries(gateway_trace PUBLIC canopen_core canopen_lss gateway_core_types gateway_json_wire
                                     PRIVATE Boost::json canopen_options)

@@ -6,7 +6,7 @@
 #include <ctime>
 
 #include "core/format.hpp"
-#include "core/json_input.hpp"
+#include "messages/json_input.hpp"
 
 namespace gateway::trace {
 
@@ -42,7 +42,7 @@ std::string frame_json(const Traced& t, std::string_view decoded, Service servic
 }
 
 bool IdFilter::parse(std::string_view text, std::string& error) {
-  const auto obj = core::parse_json_object(text, "filter", ": {\"ids\": [[from, to], ...]}", error);
+  const auto obj = parse_json_object(text, "filter", ": {\"ids\": [[from, to], ...]}", error);
   if (!obj) return false;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges;
   for (const auto& kv : *obj) {

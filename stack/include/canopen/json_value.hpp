@@ -30,6 +30,7 @@
 #include <string>
 #include <string_view>
 
+#include "canopen/literal.hpp"
 #include "canopen/result.hpp"
 #include "canopen/types.hpp"
 
@@ -39,5 +40,9 @@ namespace canopen {
 boost::json::value value_to_json(const Value& v);
 
 Result<Value> value_from_json(DataType type, const boost::json::value& json);
+
+// The JSON value as a Literal (literal.hpp): value_from_json(t, j) is
+// value_from_literal(t, literal_from_json(j)).
+Literal literal_from_json(const boost::json::value& json);
 
 }  // namespace canopen

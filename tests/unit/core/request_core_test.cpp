@@ -277,9 +277,9 @@ TEST(RequestCoreOther, SyncAndPdoReadAreAuditedAndChecked) {
   const auto no_eds = rig.run(request(PdoConfigRead{42}));
   EXPECT_EQ(problem_of(no_eds).status, 404);
   EXPECT_EQ(problem_of(no_eds).detail, "node 42 on network 1 has no EDS/DCF, so its PDOs are not decoded");
-  const auto rpdo = rig.run(request(RpdoWrite{42, 1, "{}"}));
+  const auto rpdo = rig.run(request(RpdoWrite{42, 1, {}, {}, {}}));
   EXPECT_EQ(problem_of(rpdo).detail, "node 42 has no EDS/DCF, so its RPDOs are unknown");
-  const auto unused = rig.run(request(RpdoWrite{kDescribed, 1, "{}"}));
+  const auto unused = rig.run(request(RpdoWrite{kDescribed, 1, {}, {}, {}}));
   EXPECT_EQ(problem_of(unused).status, 404);
 }
 

@@ -58,7 +58,7 @@ TEST(MqttRequestDecode, ReplyAddressAndTokenLeaveTheJsonBody) {
   const auto* w = std::get_if<core::SdoWrite>(&d.request.command);
   ASSERT_NE(w, nullptr) << "no unknown fields left: " << std::get<core::Undecodable>(d.request.command).detail;
   EXPECT_EQ(w->index, 0x6060);
-  EXPECT_EQ(w->value, boost::json::value(5));
+  EXPECT_EQ(w->value, core::WriteValue{canopen::Literal(5)});
 }
 
 TEST(MqttRequestDecode, Mqtt5PropertiesWinAndProtobufBodies) {

@@ -11,7 +11,8 @@
 #include <set>
 
 #include "canopen/od/object_dictionary.hpp"
-#include "rest_parse.hpp"
+#include "core/rpdo_values.hpp"
+#include "support/write_json.hpp"
 
 namespace gateway::sparkplug {
 namespace {
@@ -528,7 +529,7 @@ std::string refusal(const std::variant<core::Command, std::string>& r) {
 }
 
 // Contract: a DCMD on an RPDO-mapped object goes out as that RPDO; the body
-// is what the core (and REST) read: rest::parse_rpdo_body accepts it.
+// is what the core reads (core::typed_rpdo_values accepts it, as for REST).
 TEST(SparkplugDeviceModel, DcmdToAnRpdoObjectIsThatRpdosWriteInTheRestFormat) {
   Fixture f;
   const auto m = f.build();
@@ -538,8 +539,8 @@ TEST(SparkplugDeviceModel, DcmdToAnRpdoObjectIsThatRpdosWriteInTheRestFormat) {
   const auto cfg = f.pdos.resolve(kNode, {canopen::pdo::Direction::Receive, 1});
   ASSERT_TRUE(cfg);
   std::string error;
-  const auto body = rest::parse_rpdo_body(w.body, *cfg, f.desc.od, "node 5 RPDO1", error);
-  ASSERT_TRUE(body) << error << " in " << w.body;
+  const auto body = core::typed_rpdo_values(w, *cfg, f.desc.od, "node 5 RPDO1", error);
+  ASSERT_TRUE(body) << error << " in " << test::rpdo_json(w);
   ASSERT_EQ(body->values.size(), 1u);
   EXPECT_EQ(body->values[0].index, 0x6200);
   EXPECT_EQ(body->values[0].sub, 1);
@@ -556,20 +557,20 @@ TEST(SparkplugDeviceModel, DcmdToAnotherObjectIsAnSdoWriteTypedFromTheEds) {
   EXPECT_EQ(w.index, 0x2200);
   EXPECT_EQ(w.sub, 0);
   EXPECT_EQ(w.type, CT::Unsigned16);
-  EXPECT_EQ(w.value, boost::json::value(500));
+  EXPECT_EQ(test::json_of(w.value), boost::json::value(500));
   EXPECT_NE(refusal(m.command_for({4, Value{std::uint64_t{1001}}})).find("1000"), std::string::npos)
       << "the EDS HighLimit";
   EXPECT_NE(refusal(m.command_for({4, Value{std::uint64_t{70000}}})).find("above 65535"), std::string::npos);
   // td from Int64 ms; t from DateTime ms as the contract's RFC 3339 text.
-  EXPECT_EQ(sdo_of(m.command_for({5, Value{std::int64_t{90'000'000}}})).value, boost::json::value(90'000'000));
-  EXPECT_EQ(sdo_of(m.command_for({8, Value{std::uint64_t{1'795'000'000'000}}})).value,
+  EXPECT_EQ(test::json_of(sdo_of(m.command_for({5, Value{std::int64_t{90'000'000}}})).value), boost::json::value(90'000'000));
+  EXPECT_EQ(test::json_of(sdo_of(m.command_for({8, Value{std::uint64_t{1'795'000'000'000}}})).value),
             boost::json::value("2026-11-18T11:06:40.000Z"));  // date -u -d @1795000000
   EXPECT_NE(refusal(m.command_for({8, Value{std::uint64_t{1000}}})).find("TIME_OF_DAY"), std::string::npos)
       << "before 1984 does not fit";
   // Not in the EDS: written as bytes.
   const auto raw = sdo_of(m.command_for({9, Value{canopen::Bytes{0xAB, 0x01}}}));
   EXPECT_EQ(raw.type, CT::Domain);
-  EXPECT_EQ(raw.value, boost::json::value("ab01"));
+  EXPECT_EQ(test::json_of(raw.value), boost::json::value("ab01"));
 }
 
 // One DCMD: the values for one RPDO become one write (one frame), SDO
@@ -585,7 +586,7 @@ TEST(SparkplugDeviceModel, WritesOfOneCommandGroupTheRpdoValues) {
   ASSERT_EQ(plan.writes.size(), 2u);
   EXPECT_EQ(plan.refused.size(), 1u);
   const auto& rpdo = std::get<core::RpdoWrite>(plan.writes[0].command);
-  EXPECT_EQ(boost::json::parse(rpdo.body), boost::json::parse(R"({"values":[{"index":25088,"subIndex":1,"value":2}]})"))
+  EXPECT_EQ(test::rpdo_json(rpdo), boost::json::parse(R"({"values":[{"index":25088,"subIndex":1,"value":2}]})"))
       << "the object given twice: its last value";
   EXPECT_EQ(plan.writes[0].objects, (std::vector<ObjectRef>{{0x6200, 1}}));
   EXPECT_TRUE(std::holds_alternative<core::SdoWrite>(plan.writes[1].command));

@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-namespace gateway::core {
+namespace gateway {
 
 // The object in `text`; otherwise nullopt and `error` is
 // "<what> is not valid JSON: <reason>" or "<what> must be a JSON object<shape>"
@@ -18,4 +18,4 @@ namespace gateway::core {
 std::optional<boost::json::object> parse_json_object(std::string_view text, std::string_view what,
                                                      std::string_view shape, std::string& error);
 
-}  // namespace gateway::core
+}  // namespace gateway

@@ -1,9 +1,9 @@
-#include "core/json_input.hpp"
+#include "messages/json_input.hpp"
 
 #include <boost/json/parse.hpp>
 #include <boost/json/value.hpp>
 
-namespace gateway::core {
+namespace gateway {
 
 std::optional<boost::json::object> parse_json_object(std::string_view text, std::string_view what,
                                                      std::string_view shape, std::string& error) {
@@ -18,4 +18,4 @@ std::optional<boost::json::object> parse_json_object(std::string_view text, std:
   return std::nullopt;
 }
 
-}  // namespace gateway::core
+}  // namespace gateway
