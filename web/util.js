@@ -1,4 +1,4 @@
-// Small helpers the dashboard's modules (app.js, charts.js, trace.js) share.
+// Small helpers the dashboard's modules share (charts.js and trace.js among them).
 
 // 0x1A -> "001A" with `digits` hex digits, upper case.
 export const hex = (n, digits) => Number(n).toString(16).toUpperCase().padStart(digits, '0');

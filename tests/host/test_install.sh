@@ -21,8 +21,8 @@ chmod 755 "$T"       # the service's user reads the installation
 
 cmake --install "$BUILD_DIR" --prefix "$P" > "$T/install.log" 2>&1 || fail "install: $(tail -5 "$T/install.log")"
 for f in bin/canopen-gateway bin/canopen-sim bin/canopen-eds share/canopen-gateway/web/index.html \
-         share/canopen-gateway/web/app.js share/canopen-gateway/web/trace.js \
-         share/canopen-gateway/web/charts.js share/canopen-gateway/web/util.js \
+         $(for m in api app auth charts config dcf dom emcy events format header lss network nodes od state trace util values; do
+             echo "share/canopen-gateway/web/$m.js"; done) \
          share/canopen-gateway/gateway.example.yaml share/canopen-gateway/eds/cia402-drive.eds \
          share/canopen-gateway/eds/cia401-io-module.eds lib/systemd/system/canopen-gateway.service \
          share/man/man1/canopen-gateway.1.gz share/man/man1/canopen-eds.1.gz share/man/man1/canopen-sim.1.gz \
