@@ -7,6 +7,7 @@ find_package(OpenSSL REQUIRED)
 include(${CMAKE_CURRENT_LIST_DIR}/codec.cmake)
 add_library(gateway_mqtt STATIC
   ${CMAKE_CURRENT_LIST_DIR}/disk_queue.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/disk_queue_replay.cpp
   ${CMAKE_CURRENT_LIST_DIR}/outbound_queue.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stall_detector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/session.cpp
