@@ -1,8 +1,8 @@
 // One MQTT network connection on the caller's io_context: TCP or TLS
 // connect, a read loop that hands up what arrives, and coalesced writes.
 // It knows no MQTT packets, sessions, queues or timeouts: the Session
-// (session.hpp) does the protocol and MqttPublisher drives both (and limits
-// the connect time by closing the connection).
+// (session.hpp) does the protocol and mqtt::Client (client.hpp) drives both
+// (and limits the connect time by closing the connection).
 //
 // Writing: callers append encoded packets to out() and call flush().
 // Everything appended while a write is in progress goes out in the next

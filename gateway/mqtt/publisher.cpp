@@ -2,20 +2,18 @@
 
 #include "event_encoder.hpp"
 
+#include "mqtt/client.hpp"
 #include "mqtt/mqtt_codec.hpp"
-#include "mqtt/mqtt_connection.hpp"
 #include "mqtt/session.hpp"
 #include "mqtt/stall_detector.hpp"
 #include "mqtt/topic_filter.hpp"
 
 #include <boost/asio/post.hpp>
-#include <boost/asio/ssl/context.hpp>
 #include <boost/asio/steady_timer.hpp>
 
 #include <algorithm>
 #include <cstdint>
 #include <optional>
-#include <stdexcept>
 #include <vector>
 
 namespace gateway::mqtt {
@@ -25,20 +23,6 @@ namespace asio = boost::asio;
 namespace json = boost::json;
 
 }  // namespace
-
-std::string normalize_server_uri(const std::string& uri) {
-  static constexpr std::pair<std::string_view, std::string_view> kSchemes[] = {
-      {"tcp://", "tcp://"}, {"ssl://", "ssl://"}, {"mqtt://", "tcp://"}, {"mqtts://", "ssl://"}};
-  for (auto [from, to] : kSchemes) {
-    if (uri.rfind(from, 0) == 0) {
-      std::string rest = uri.substr(from.size());
-      if (rest.empty() || rest[0] == ':' || rest[0] == '/') throw std::invalid_argument("MQTT URI without host: " + uri);
-      return std::string(to) + rest;
-    }
-  }
-  throw std::invalid_argument("MQTT URI must start with tcp://, ssl://, mqtt:// or mqtts://: " + uri);
-}
-
 
 namespace {
 // The publisher batches the queue's writes (see publisher.hpp, Delivery).
@@ -60,32 +44,34 @@ constexpr std::uint16_t kOurReceiveMaximum = 64;
 // by the window); drain() resumes when it has gone out.
 constexpr std::size_t kMaxBuffered = 256u << 10;
 
-Session::Options session_options(const MqttConfig& c) {
-  Session::Options o;
-  o.mqtt_version = c.mqtt_version;
-  o.client_id = c.client_id;
-  o.username = c.username;
-  o.password = c.password;
-  o.will_topic = gateway::status_topic(c.gateway_id);
-  o.will_payload = c.offline_payload;
-  o.keepalive = c.keepalive;
-  o.connect_timeout = c.connect_timeout;
-  o.inflight_window = c.inflight_window;
-  o.receive_maximum = kOurReceiveMaximum;
-  o.maximum_packet_size = static_cast<std::uint32_t>(kMaxIncomingPacket);
+// The native session: the status Will (retained, QoS 1), the in-flight
+// window of the configuration, requests as the only incoming traffic.
+Client::Options client_options(const MqttConfig& c) {
+  Client::Options o;
+  o.session = Client::common_session_options(c);
+  o.session.will_topic = gateway::status_topic(c.gateway_id);
+  o.session.will_payload = c.offline_payload;
+  o.session.inflight_window = c.inflight_window;
+  o.session.receive_maximum = kOurReceiveMaximum;
+  o.session.maximum_packet_size = static_cast<std::uint32_t>(kMaxIncomingPacket);
+  o.log_prefix = "mqtt";
+  o.connect_error_hint = "client id, user, will";
   return o;
 }
 }  // namespace
 
-// The Asio adapter around the sans-I/O Session: the socket (MqttConnection),
-// the timers, the reconnect backoff, the queue and its storage, stalls.
-struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, SessionEvents {
+// The queue, its storage, stalls and requests over the MQTT client
+// (client.hpp: connection, TLS, session, timers, reconnect backoff).
+struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, ClientEvents {
   Impl(asio::io_context& io_ctx, MqttConfig c, Logger& l, RequestSink h)
       : io(io_ctx), cfg(std::move(c)), log(l), on_request(std::move(h)), queue(queue_options(cfg)),
-        sync_timer(io_ctx), retry_timer(io_ctx), session_timer(io_ctx), session(session_options(cfg), *this) {
+        queue_warned(log_queue_warnings()), sync_timer(io_ctx), client(io_ctx, cfg, client_options(cfg), *this, l),
+        session(client.session()) {}
+
+  // The queue's open warnings go out before the client checks the URI.
+  bool log_queue_warnings() {
     for (const auto& w : queue.disk().take_warnings()) log.warn("mqtt: queue: " + w);
-    uri = normalize_server_uri(cfg.server_uri);
-    endpoint = parse_endpoint(uri);
+    return true;
   }
 
   asio::io_context& io;
@@ -93,37 +79,25 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   Logger& log;
   RequestSink on_request;  // mqtt_requests.hpp
   OutboundQueue queue;
+  bool queue_warned;
   asio::steady_timer sync_timer;
-  asio::steady_timer retry_timer;
   StallDetector stall;
   std::error_code storage_error;            // as last logged
   std::uint64_t dropped_at_storage_error = 0;
-  std::string uri;
-  Endpoint endpoint;
-  std::unique_ptr<asio::ssl::context> tls_ctx;
-  asio::steady_timer session_timer;  // at session.deadline()
-  Session session;
-  std::shared_ptr<MqttConnection> conn;
-  std::uint64_t conn_gen = 0;  // which connection callbacks belong to
-  bool buffer_full = false;    // drain() stopped at kMaxBuffered
+  Client client;
+  Session& session;          // the client's
+  bool buffer_full = false;  // drain() stopped at kMaxBuffered
   bool pump_posted = false;
-  bool draining = false;  // inside drain(): on_drained must not re-enter it
-  bool running = false;
-  bool connected = false;
-  bool connecting = false;
-  unsigned failures = 0;  // consecutive, for the backoff
-  std::uint64_t socket_writes_before = 0;    // writes of earlier connections
-  OutboundQueue::Item item;                  // reused by drain()
-  std::string scratch;                       // stop()'s last packets
+  bool draining = false;     // inside drain(): on_drained must not re-enter it
+  OutboundQueue::Item item;  // reused by drain()
   Counters counters;
 
   std::string status_topic() const { return gateway::status_topic(cfg.gateway_id); }
 
   void start() {
-    if (running) return;
-    running = true;
+    if (client.running()) return;
     arm_sync();
-    connect();
+    client.start(weak_from_this());
   }
 
   // Every sync_interval (or 1 s without syncing): write what the queue
@@ -137,7 +111,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     sync_timer.expires_after(period);
     sync_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
       auto self = weak.lock();
-      if (ec || !self || !self->running) return;
+      if (ec || !self || !self->client.running()) return;
       if (self->cfg.sync_interval.count() > 0)
         self->queue.disk().sync();  // flushes records and the position first
       else
@@ -166,12 +140,12 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   }
 
   void check_stall() {
-    if (!connected) return;
+    if (!client.connected()) return;
     const auto now = std::chrono::steady_clock::now();
     StallDetector::Observation o;
     o.in_flight = in_flight();
     o.unsent = o.in_flight == 0 && queue.depth() > 0 && queue.has_unsent();
-    o.send_scheduled = pump_posted || buffer_full || (conn && conn->pending() > 0);
+    o.send_scheduled = pump_posted || buffer_full || client.pending() > 0;
     const auto verdict = stall.check(now, o);
     if (verdict == StallDetector::Verdict::Ok) return;
     ++counters.stalls;
@@ -184,136 +158,19 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     drain();
   }
 
-  bool ensure_tls() {
-    if (!endpoint.tls || tls_ctx) return true;
-    try {
-      tls_ctx = make_tls_context(cfg);
-      return true;
-    } catch (const std::exception& e) {
-      log.error(std::string("mqtt: TLS setup for ") + uri + " failed: " + e.what());
-      return false;
-    }
-  }
+  // --- ClientEvents -------------------------------------------------------
 
-  void connect() {
-    if (!running || connected || connecting) return;
-    if (!ensure_tls()) {
-      schedule_retry();
-      return;
-    }
-    if (auto e = session.open(std::chrono::steady_clock::now()); e != codec::Error::None) {
-      log.error(std::string("mqtt: cannot build CONNECT (client id, user, will): ") + codec::to_string(e));
-      schedule_retry();
-      return;
-    }
-    connecting = true;
-    const std::uint64_t c = ++conn_gen;
-    std::weak_ptr<Impl> weak = weak_from_this();
-    MqttConnection::Callbacks cb;
-    // Each callback checks that its connection is still the current one.
-    auto current = [weak](std::uint64_t gen) -> std::shared_ptr<Impl> {
-      auto self = weak.lock();
-      return self && self->conn && self->conn_gen == gen ? self : nullptr;
-    };
-    cb.on_open = [current, c] {
-      if (auto self = current(c)) self->session.transport_connected(self->conn->out(), std::chrono::steady_clock::now());
-    };
-    cb.on_data = [current, c](std::string_view bytes) {
-      if (auto self = current(c)) self->session.received(self->conn->out(), bytes, std::chrono::steady_clock::now());
-    };
-    cb.on_drained = [current, c] {
-      if (auto self = current(c)) self->on_drained();
-    };
-    cb.on_closed = [current, c](const std::string& why) {
-      if (auto self = current(c)) self->session.transport_closed(why);
-    };
-    conn = std::make_shared<MqttConnection>(io, tls_ctx.get(), cfg.verify_server, std::move(cb));
-    conn->open(endpoint);
-  }
-
-  void drop_connection() {
-    if (!conn) return;
-    socket_writes_before += conn->writes();
-    conn->close();
-    conn.reset();
-  }
-
-  void schedule_retry() {
-    if (!running) return;
-    const auto delay = reconnect_delay(cfg, failures);
-    ++failures;
-    retry_timer.expires_after(delay);
-    retry_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
-      auto self = weak.lock();
-      if (ec || !self) return;
-      self->connect();
-    });
-  }
-
-  // --- SessionEvents ----------------------------------------------------
-
-  // One timer for the session's deadline (connect timeout, keepalive).
-  void on_deadline_changed() override {
-    const auto d = session.deadline();
-    if (!d) {
-      session_timer.cancel();
-      return;
-    }
-    session_timer.expires_at(*d);
-    session_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
-      auto self = weak.lock();
-      if (ec || !self) return;
-      std::string unused;  // no connection: the session only times out
-      const auto c = self->conn;  // alive while the session may write to it
-      self->session.on_timer(c ? c->out() : unused, std::chrono::steady_clock::now());
-      if (self->conn) self->conn->flush();
-    });
-  }
-
-  // The connection failed before or after CONNACK, or the broker closed it
-  // (the session has forgotten what was in flight).
-  void on_lost(const std::string& why, bool was_up) override {
-    drop_connection();
-    if (!was_up) {
-      connecting = false;
-      if (!running) return;
-      if (failures == 0 || log.enabled(LogLevel::Debug)) log.warn("mqtt: connect to " + uri + " failed: " + why + ", retrying");
-      schedule_retry();
-      return;
-    }
-    if (!connected) return;
-    connected = false;
-    queue.rewind();            // resend everything unacked, in order, after reconnect
-    queue.set_online(false);   // `outage` messages in memory go to disk
+  // The connection is over after CONNACK (the session has forgotten what
+  // was in flight); the client reconnects.
+  void on_down(Down cause, const std::string& why) override {
+    if (cause != Down::Lost) return;
+    queue.rewind();           // resend everything unacked, in order, after reconnect
+    queue.set_online(false);  // `outage` messages in memory go to disk
     log.warn("mqtt: " + why + "; " + std::to_string(queue.depth()) + " messages queued");
-    if (running) schedule_retry();
   }
 
-  void on_refused(std::uint8_t code, bool fell_back) override {
-    connecting = false;
-    drop_connection();
-    if (!running) return;
-    if (fell_back) {
-      log.warn("mqtt: broker " + uri + " refuses MQTT 5, falling back to 3.1.1");
-      connect();
-      return;
-    }
-    if (failures == 0 || log.enabled(LogLevel::Debug))
-      log.warn("mqtt: connect to " + uri + " refused (code " + std::to_string(code) + "), retrying");
-    schedule_retry();
-  }
-
-  void on_connected(const BrokerLimits& limits) override {
-    connecting = false;
-    if (!running) {
-      session.close();
-      drop_connection();
-      return;
-    }
-    connected = true;
-    failures = 0;
-    if (counters.connects++ > 0) ++counters.reconnects;
-    log.info("mqtt: connected to " + uri + " with MQTT " + (limits.version == codec::kMqtt5 ? "5" : "3.1.1") +
+  void on_up(const BrokerLimits& limits) override {
+    log.info("mqtt: connected to " + client.uri() + " with MQTT " + (limits.version == codec::kMqtt5 ? "5" : "3.1.1") +
              (limits.receive_maximum > 0 ? ", receive maximum " + std::to_string(limits.receive_maximum)
                                          : std::string()));
     queue.set_online(true);
@@ -323,7 +180,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
       const auto filters = request_filters(cfg.gateway_id);
       // MQTT 5: no local, so the gateway's own replies are not echoed.
       const codec::Subscription subs[] = {{filters[0], 1, true}, {filters[1], 1, true}, {filters[2], 1, true}};
-      if (auto r = session.subscribe(conn->out(), subs); r.error != codec::Error::None)
+      if (auto r = session.subscribe(client.out(), subs); r.error != codec::Error::None)
         log.warn("mqtt: request topics cannot be subscribed (gateway id not UTF-8?)");
     }
     queue.rewind();
@@ -332,15 +189,15 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
       log.debug("mqtt: sending from " + std::to_string(queue.disk().head_seq()) + ", " +
                 std::to_string(queue.depth()) + " queued");
     drain();
-    if (conn) conn->flush();  // status and SUBSCRIBE when the queue is empty
+    if (client.has_connection()) client.flush();  // status and SUBSCRIBE when the queue is empty
   }
 
   // A QoS 1 PUBLISH outside the queue (status, replies). False when it
   // could not be encoded.
   bool send_control(std::string_view topic, std::string_view payload, bool retain,
                     const codec::PublishProperties* props) {
-    if (!conn) return false;
-    return session.publish_control(conn->out(), topic, payload, retain, props);
+    if (!client.has_connection()) return false;
+    return session.publish_control(client.out(), topic, payload, retain, props);
   }
 
   void on_acked(std::uint64_t seq) override {
@@ -355,7 +212,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
 
   // An incoming PUBLISH can only be a request (the only subscriptions).
   void on_publish(const codec::Publish& p) override {
-    if (running && on_request) on_request(p);
+    if (client.running() && on_request) on_request(p);
   }
 
   void on_subscribe_refused(std::uint8_t code) override {
@@ -366,20 +223,19 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   // the PUBACKs to requests and the next PUBLISHes).
   void on_batch_end(bool acked) override {
     if (acked) stall.progress(std::chrono::steady_clock::now());
-    const std::uint64_t writes = conn ? conn->writes() : 0;
+    const std::uint64_t writes = client.writes();
     drain();
-    if (!conn) return;
-    conn->flush();
+    if (!client.has_connection()) return;
+    client.flush();
     // Nothing written back (the window is still more than half full): ACK
     // at once, or a Nagle broker holds the PUBACKs we wait for.
-    if (conn && conn->writes() == writes && session.inflight_qos1() > 0) conn->ack_now();
+    if (client.has_connection() && client.writes() == writes && session.inflight_qos1() > 0) client.ack_now();
   }
 
   // Every byte handed to the kernel: the session's keepalive sees the
   // write, and every QoS 0 message written has left the queue.
-  void on_drained() {
-    const auto now = std::chrono::steady_clock::now();
-    if (session.wrote(now) == 0) return;
+  void on_drained(std::size_t qos0_acked, std::chrono::steady_clock::time_point now) override {
+    if (qos0_acked == 0) return;
     stall.progress(now);
     // A drain stopped by kMaxBuffered continues (not from inside drain()).
     if (!draining && buffer_full) schedule_pump();
@@ -388,7 +244,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   void drain() {
     // Whoever drains (pump, PUBACK batch, reconnect, retry): what is sent
     // is written to the queue's files first.
-    if (!connected || !conn) return;
+    if (!client.connected() || !client.has_connection()) return;
     if (queue.disk().flush_pending()) flush_queue();
     const std::size_t limit = session.window();
     // Refill only once at most half the window is in flight: the window
@@ -399,9 +255,9 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     buffer_full = false;
     for (;;) {
       bool any = false;
-      while (connected && session.inflight_qos1() < limit && queue.next(item)) {
+      while (client.connected() && session.inflight_qos1() < limit && queue.next(item)) {
         const auto r =
-            session.publish(conn->out(), item.seq, item.msg.topic, item.msg.payload, item.msg.qos, item.msg.retained);
+            session.publish(client.out(), item.seq, item.msg.topic, item.msg.payload, item.msg.qos, item.msg.retained);
         if (r.busy) {  // no packet id free: cannot happen with the window's cap
           queue.rewind_to(item.seq);
           break;
@@ -416,15 +272,15 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
         }
         ++counters.sent;
         any = true;
-        if (conn->pending() >= kMaxBuffered) {
+        if (client.pending() >= kMaxBuffered) {
           buffer_full = true;
           break;
         }
       }
-      if (!any || !conn) break;
-      conn->flush();  // one write for the batch; may ack QoS 0 at once
+      if (!any || !client.has_connection()) break;
+      client.flush();  // one write for the batch; may ack QoS 0 at once
       // Go on only if the buffer cap stopped us and the write took it all.
-      if (!conn || !buffer_full || conn->pending() > 0) break;
+      if (!client.has_connection() || !buffer_full || client.pending() > 0) break;
       buffer_full = false;
     }
     draining = false;
@@ -462,32 +318,26 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   // --- request replies (the requests themselves: mqtt_requests.hpp) -------
 
   ReplyOutcome send_reply(std::string_view topic, std::string_view body, const codec::PublishProperties& props) {
-    if (!connected || !conn) return ReplyOutcome::not_connected;
+    if (!client.connected() || !client.has_connection()) return ReplyOutcome::not_connected;
     if (!send_control(topic, body, false, &props)) return ReplyOutcome::not_encodable;
-    conn->flush();  // a reply from a handler completing later has no batch to join
+    client.flush();  // a reply from a handler completing later has no batch to join
     return ReplyOutcome::sent;
   }
 
   void stop(std::chrono::milliseconds timeout, const MqttPublisher::Farewell& last) {
-    if (!running) return;
-    running = false;
+    if (!client.running()) return;
     sync_timer.cancel();
-    retry_timer.cancel();
-    session_timer.cancel();
-    bool farewell_sent = false;
-    if (conn && connected) {
-      // Everything goes in one synchronous write (a TLS write started now
-      // could not be joined): first the queue's unsent messages as drain()
-      // would send them (window and buffer cap), so the final messages
-      // overtake nothing when there is no backlog; then the
-      // farewell, the offline status (retained) and DISCONNECT. The broker
-      // handles them in order, so the Will is not sent.
-      scratch.clear();
+    std::vector<std::uint64_t> tail_q0;  // leave the queue once written, as in on_drained()
+    // Everything goes in one synchronous write: first the queue's unsent
+    // messages as drain() would send them (window and buffer cap), so the
+    // final messages overtake nothing when there is no backlog; then the
+    // farewell, the offline status (retained) and DISCONNECT. The broker
+    // handles them in order, so the Will is not sent.
+    const auto farewell = client.stop(timeout, [&](std::string& out) {
       flush_queue();
-      std::vector<std::uint64_t> tail_q0;  // leave the queue once written, as in on_drained()
-      while (session.window_open() && scratch.size() < kMaxBuffered && queue.next(item)) {
+      while (session.window_open() && out.size() < kMaxBuffered && queue.next(item)) {
         const auto r =
-            session.publish(scratch, item.seq, item.msg.topic, item.msg.payload, item.msg.qos, item.msg.retained);
+            session.publish(out, item.seq, item.msg.topic, item.msg.payload, item.msg.qos, item.msg.retained);
         if (r.busy) break;
         // Not encodable: left queued; the next run's drain() drops it.
         if (r.error != codec::Error::None) continue;
@@ -495,22 +345,15 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
         ++counters.sent;
       }
       // The last messages' PUBACKs are never awaited.
-      for (const auto& m : last.messages) session.publish_final(scratch, m.topic, m.payload, m.qos, m.retained);
-      session.publish_final(scratch, status_topic(),
+      for (const auto& m : last.messages) session.publish_final(out, m.topic, m.payload, m.qos, m.retained);
+      session.publish_final(out, status_topic(),
                             last.offline_payload.empty() ? cfg.offline_payload : last.offline_payload, 1, true);
-      session.disconnect(scratch);
-      socket_writes_before += conn->writes();
-      farewell_sent = conn->finish(scratch, timeout);
-      if (!farewell_sent) log.warn("mqtt: disconnect did not complete; the broker sends the Will");
-      for (auto seq : farewell_sent ? tail_q0 : std::vector<std::uint64_t>{})
-        if (queue.ack(seq)) ++counters.acked;
-      conn.reset();
-    } else {
-      drop_connection();
-    }
-    session.close();
-    connected = false;
-    connecting = false;
+      session.disconnect(out);
+    });
+    const bool farewell_sent = farewell == Client::Farewell::Sent;
+    if (farewell == Client::Farewell::NotSent) log.warn("mqtt: disconnect did not complete; the broker sends the Will");
+    for (auto seq : farewell_sent ? tail_q0 : std::vector<std::uint64_t>{})
+      if (queue.ack(seq)) ++counters.acked;
     queue.rewind();
     queue.set_online(false);  // `outage` messages still in memory go to disk for the next run
     // Unacknowledged messages are replayed by the next run; the farewell
@@ -529,9 +372,11 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     c.queue_bytes = queue.disk().counters().bytes + queue.counters().memory_bytes;
     c.storage_failing = static_cast<bool>(queue.disk().storage_error());
     c.in_flight = in_flight();
-    c.connected = connected;
-    c.mqtt_version = connected ? session.version() : 0;
-    c.socket_writes = socket_writes_before + (conn ? conn->writes() : 0);
+    c.connects = client.connects();
+    c.reconnects = client.reconnects();
+    c.connected = client.connected();
+    c.mqtt_version = client.version();
+    c.socket_writes = client.writes();
     return c;
   }
 };

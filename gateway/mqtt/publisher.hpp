@@ -4,9 +4,9 @@
 //
 // Settings: MqttConfig (mqtt_config.hpp). The MQTT protocol (CONNECT and
 // CONNACK, packet ids, the in-flight window, keepalive, the fallback to
-// 3.1.1, the broker's limits) is the sans-I/O Session (session.hpp); the
-// publisher is its Asio adapter: the socket (mqtt_connection.hpp), the
-// timers, the reconnect backoff, the queue and its storage, and requests.
+// 3.1.1, the broker's limits) is the sans-I/O Session (session.hpp), run by
+// the MQTT client (client.hpp: socket, TLS, timer, reconnect backoff); the
+// publisher adds the queue and its storage, the flow and requests.
 //
 // Storage: each event kind has a StorageMode (MqttConfig::storage_for;
 // outbound_queue.hpp). `disk` (default for QoS 1 kinds): written to the
@@ -191,7 +191,7 @@ class MqttPublisher {
 };
 
 // "tcp://h:1" stays; mqtt:// -> tcp://, mqtts:// -> ssl://. Throws
-// std::invalid_argument for any other scheme or an empty host.
+// std::invalid_argument for any other scheme or an empty host (client.hpp).
 std::string normalize_server_uri(const std::string& uri);
 
 }  // namespace gateway::mqtt

@@ -1,14 +1,11 @@
 #include "sparkplug/edge_client.hpp"
 
 #include <boost/asio/post.hpp>
-#include <boost/asio/ssl/context.hpp>
-#include <boost/asio/steady_timer.hpp>
 
 #include "metrics/metrics.hpp"
 #include "metrics/registry.hpp"
+#include "mqtt/client.hpp"
 #include "mqtt/mqtt_codec.hpp"
-#include "mqtt/mqtt_connection.hpp"
-#include "mqtt/publisher.hpp"  // normalize_server_uri
 #include "mqtt/session.hpp"
 
 namespace gateway::sparkplug {
@@ -22,17 +19,14 @@ constexpr const char* kTypeNames[EdgeClient::kTypes] = {"NBIRTH", "NDEATH", "DBI
 // Largest packet accepted from the broker (commands, STATE).
 constexpr std::uint32_t kMaxIncomingPacket = 1u << 20;
 
-mqtt::Session::Options session_options(const mqtt::MqttConfig& c) {
-  mqtt::Session::Options o;
-  o.mqtt_version = c.mqtt_version;
-  o.client_id = c.client_id;
-  o.username = c.username;
-  o.password = c.password;
-  o.will_qos = 1;         // facts A.4.2: NDEATH Will QoS 1, not retained
-  o.will_retain = false;  // (topic and payload: set_will() per CONNECT)
-  o.keepalive = c.keepalive;
-  o.connect_timeout = c.connect_timeout;
-  o.maximum_packet_size = kMaxIncomingPacket;
+mqtt::Client::Options client_options(const mqtt::MqttConfig& c) {
+  mqtt::Client::Options o;
+  o.session = mqtt::Client::common_session_options(c);
+  o.session.will_qos = 1;         // facts A.4.2: NDEATH Will QoS 1, not retained
+  o.session.will_retain = false;  // (topic and payload: set_will() per CONNECT)
+  o.session.maximum_packet_size = kMaxIncomingPacket;
+  o.log_prefix = "sparkplug";
+  o.connect_error_hint = "client id, user, ids not UTF-8?";
   return o;
 }
 
@@ -60,13 +54,12 @@ const char* state_name(EdgeSession::State s) {
 
 const char* EdgeClient::type_name(Type t) { return kTypeNames[static_cast<std::size_t>(t)]; }
 
-struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::SessionEvents {
+// The EdgeSession over the MQTT client (mqtt/client.hpp: connection, TLS,
+// session, timers, reconnect backoff).
+struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::ClientEvents {
   Impl(asio::io_context& io_ctx, EdgeClientConfig c, Logger& l)
       : io(io_ctx), cfg(std::move(c)), log(l), store(cfg.state_dir), edge(cfg.session, store),
-        retry_timer(io_ctx), session_timer(io_ctx), session(session_options(cfg.mqtt), *this) {
-    uri = mqtt::normalize_server_uri(cfg.mqtt.server_uri);
-    endpoint = mqtt::parse_endpoint(uri);
-  }
+        client(io_ctx, cfg.mqtt, client_options(cfg.mqtt), *this, l), session(client.session()) {}
 
   asio::io_context& io;
   EdgeClientConfig cfg;
@@ -74,24 +67,13 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
   EdgeClient* owner = nullptr;  // for on_command; reset when the client goes
   BdSeqStore store;
   EdgeSession edge;
-  std::string uri;
-  mqtt::Endpoint endpoint;
-  std::unique_ptr<asio::ssl::context> tls_ctx;
-  asio::steady_timer retry_timer;
-  asio::steady_timer session_timer;  // at session.deadline()
-  mqtt::Session session;
-  std::shared_ptr<mqtt::MqttConnection> conn;
-  std::uint64_t conn_gen = 0;
-  bool running = false;
-  bool connected = false;
-  bool connecting = false;
-  bool closing = false;        // the EdgeSession ended the session: close once drained
-  bool rebirth_due = false;    // DATA was dropped: births again once drained
-  bool born_here = false;      // an NBIRTH went out on this connection
-  unsigned failures = 0;
+  mqtt::Client client;
+  mqtt::Session& session;    // the client's
+  bool closing = false;      // the EdgeSession ended the session: close once drained
+  bool rebirth_due = false;  // DATA was dropped: births again once drained
+  bool born_here = false;    // an NBIRTH went out on this connection
   Counters counters;
   std::vector<Outgoing> scratch_out;  // reused by the handlers
-  std::string final_bytes;            // stop()'s NDEATH and DISCONNECT
 
   std::uint64_t now_ms() const {
     return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -99,94 +81,11 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
                                           .count());
   }
 
-  void start() {
-    if (running) return;
-    running = true;
-    connect();
-  }
-
-  bool ensure_tls() {
-    if (!endpoint.tls || tls_ctx) return true;
-    try {
-      tls_ctx = mqtt::make_tls_context(cfg.mqtt);
-      return true;
-    } catch (const std::exception& e) {
-      log.error(std::string("sparkplug: TLS setup for ") + uri + " failed: " + e.what());
-      return false;
-    }
-  }
-
-  void connect() {
-    if (!running || connected || connecting) return;
-    if (!ensure_tls()) {
-      schedule_retry();
-      return;
-    }
-    // A new bdSeq for every CONNECT attempt, stored before it is sent (facts A.5).
-    auto params = edge.connect_params();
-    if (!params.store_note.empty()) log.warn("sparkplug: " + params.store_note);
-    session.set_will(std::move(params.will_topic), std::move(params.will_payload));
-    if (auto e = session.open(std::chrono::steady_clock::now()); e != codec::Error::None) {
-      log.error(std::string("sparkplug: cannot build CONNECT (client id, user, ids not UTF-8?): ") +
-                codec::to_string(e));
-      schedule_retry();
-      return;
-    }
-    connecting = true;
-    closing = false;
-    const std::uint64_t c = ++conn_gen;
-    std::weak_ptr<Impl> weak = weak_from_this();
-    auto current = [weak](std::uint64_t gen) -> std::shared_ptr<Impl> {
-      auto self = weak.lock();
-      return self && self->conn && self->conn_gen == gen ? self : nullptr;
-    };
-    mqtt::MqttConnection::Callbacks cb;
-    cb.on_open = [current, c] {
-      if (auto self = current(c)) {
-        self->session.transport_connected(self->conn->out(), std::chrono::steady_clock::now());
-        self->conn->flush();
-      }
-    };
-    cb.on_data = [current, c](std::string_view bytes) {
-      if (auto self = current(c)) {
-        auto keep = self->conn;  // the session may drop the connection meanwhile
-        self->session.received(keep->out(), bytes, std::chrono::steady_clock::now());
-        if (self->conn == keep) keep->flush();  // PUBACKs, births, answers to commands
-      }
-    };
-    cb.on_drained = [current, c] {
-      if (auto self = current(c)) self->on_drained();
-    };
-    cb.on_closed = [current, c](const std::string& why) {
-      if (auto self = current(c)) self->session.transport_closed(why);
-    };
-    conn = std::make_shared<mqtt::MqttConnection>(io, tls_ctx.get(), cfg.mqtt.verify_server, std::move(cb));
-    conn->open(endpoint);
-  }
-
-  void drop_connection() {
-    if (!conn) return;
-    conn->close();
-    conn.reset();
-  }
-
-  void schedule_retry() {
-    if (!running) return;
-    const auto delay = mqtt::reconnect_delay(cfg.mqtt, failures);
-    ++failures;
-    retry_timer.expires_after(delay);
-    retry_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
-      auto self = weak.lock();
-      if (ec || !self) return;
-      self->connect();
-    });
-  }
+  void start() { client.start(weak_from_this()); }
 
   // The connection is over, whoever ended it: the EdgeSession starts over
   // (a new bdSeq and births on the next connection).
   void went_down() {
-    connected = false;
-    connecting = false;
     closing = false;
     rebirth_due = false;
     born_here = false;
@@ -196,7 +95,7 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
   // --- carrying out the EdgeSession's list ---------------------------------
 
   void send(std::vector<Outgoing>& out) {
-    if (!connected || !conn) {
+    if (!client.connected() || !client.has_connection()) {
       for (const auto& o : out) {
         if (o.kind != Outgoing::Kind::Publish) continue;
         const auto t = type_of(o.topic, edge.topic_prefix());
@@ -206,11 +105,11 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
       return;
     }
     for (auto& o : out) {
-      if (!conn) break;  // the session ended inside this loop
+      if (!client.has_connection()) break;  // the session ended inside this loop
       switch (o.kind) {
         case Outgoing::Kind::Subscribe: {
           const codec::Subscription sub[] = {{o.topic, o.qos, false}};
-          if (auto r = session.subscribe(conn->out(), sub); !r.ok())
+          if (auto r = session.subscribe(client.out(), sub); !r.ok())
             log.warn("sparkplug: cannot subscribe to '" + o.topic + "' (id not UTF-8?)");
           break;
         }
@@ -219,19 +118,19 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
           // The EdgeSession ended the session (Primary Host offline): the
           // DISCONNECT goes out, the connection closes once it drained (or
           // the broker closes it), and the client connects again.
-          session.disconnect(conn->out(), session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);
+          session.disconnect(client.out(), session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);
           closing = true;
           break;
       }
     }
     out.clear();
-    if (conn) conn->flush();
+    if (client.has_connection()) client.flush();
   }
 
   void publish(const Outgoing& o) {
     const auto t = type_of(o.topic, edge.topic_prefix());
     const bool data = t == Type::NDATA || t == Type::DDATA;
-    if (data && (rebirth_due || conn->pending() > cfg.max_buffered)) {
+    if (data && (rebirth_due || client.pending() > cfg.max_buffered)) {
       // Backpressure: the births that follow the drain carry these values.
       ++counters.dropped;
       if (!rebirth_due) log.warn("sparkplug: the broker does not keep up; dropping DATA until a rebirth");
@@ -240,9 +139,9 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
     }
     bool ok = false;
     if (o.qos > 0) {
-      ok = session.publish_control(conn->out(), o.topic, o.payload, o.retain);
+      ok = session.publish_control(client.out(), o.topic, o.payload, o.retain);
     } else {
-      ok = session.publish(conn->out(), 0, o.topic, o.payload, 0, o.retain).ok();
+      ok = session.publish(client.out(), 0, o.topic, o.payload, 0, o.retain).ok();
     }
     if (!ok) {
       log.warn("sparkplug: cannot send to '" + o.topic + "' (over the broker's maximum packet size?)");
@@ -258,19 +157,21 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
     }
   }
 
+  // --- mqtt::ClientEvents ---------------------------------------------------
+
   // Every byte reached the kernel (possibly from inside a flush()): what
   // closes the connection or writes again runs as a handler of its own.
-  void on_drained() {
-    session.wrote(std::chrono::steady_clock::now());
+  void on_drained(std::size_t, std::chrono::steady_clock::time_point) override {
     if (!closing && !rebirth_due) return;
-    asio::post(io, [weak = weak_from_this(), gen = conn_gen] {
+    asio::post(io, [weak = weak_from_this(), gen = client.connection_id()] {
       auto self = weak.lock();
-      if (!self || !self->conn || self->conn_gen != gen) return;
+      if (!self || !self->client.has_connection() || self->client.connection_id() != gen) return;
       if (self->closing) {
-        self->end_connection("session ended by the edge node");
+        // Closes the connection and connects again with backoff.
+        self->client.end_connection("session ended by the edge node");
         return;
       }
-      if (self->rebirth_due && self->conn->pending() == 0) {
+      if (self->rebirth_due && self->client.pending() == 0) {
         self->rebirth_due = false;
         self->log.info("sparkplug: the broker caught up; births again");
         self->edge.rebirth(self->scratch_out, self->now_ms());
@@ -279,47 +180,18 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
     });
   }
 
-  // Closes the connection ourselves and connects again with backoff.
-  void end_connection(const std::string& why) {
-    session.close();
-    drop_connection();
-    if (connected) log.warn("sparkplug: disconnected from " + uri + ": " + why);
-    went_down();
-    schedule_retry();
+  // A new bdSeq for every CONNECT attempt, stored before it is sent (facts A.5).
+  void on_connecting() override {
+    auto params = edge.connect_params();
+    if (!params.store_note.empty()) log.warn("sparkplug: " + params.store_note);
+    session.set_will(std::move(params.will_topic), std::move(params.will_payload));
+    closing = false;
   }
 
-  // --- SessionEvents ------------------------------------------------------
-
-  void on_deadline_changed() override {
-    const auto d = session.deadline();
-    if (!d) {
-      session_timer.cancel();
-      return;
-    }
-    session_timer.expires_at(*d);
-    session_timer.async_wait([weak = weak_from_this()](const boost::system::error_code& ec) {
-      auto self = weak.lock();
-      if (ec || !self) return;
-      std::string unused;
-      const auto c = self->conn;
-      self->session.on_timer(c ? c->out() : unused, std::chrono::steady_clock::now());
-      if (self->conn) self->conn->flush();
-    });
-  }
-
-  void on_connected(const mqtt::BrokerLimits& limits) override {
-    connecting = false;
-    if (!running) {
-      session.close();
-      drop_connection();
-      return;
-    }
-    connected = true;
-    failures = 0;
+  void on_up(const mqtt::BrokerLimits& limits) override {
     born_here = false;
-    if (counters.connects++ > 0) ++counters.reconnects;
     log.info("sparkplug: edge node " + cfg.session.group_id + "/" + cfg.session.edge_node_id + " connected to " +
-             uri + " with MQTT " + (limits.version == codec::kMqtt5 ? "5" : "3.1.1") + ", bdSeq " +
+             client.uri() + " with MQTT " + (limits.version == codec::kMqtt5 ? "5" : "3.1.1") + ", bdSeq " +
              std::to_string(edge.bd_seq().value_or(0)) +
              (cfg.session.primary_host_id.empty() ? std::string()
                                                   : ", waiting for Primary Host " + cfg.session.primary_host_id));
@@ -327,39 +199,14 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
     send(scratch_out);
   }
 
-  void on_refused(std::uint8_t code, bool fell_back) override {
-    connecting = false;
-    drop_connection();
+  // Refused, failed, lost or ended by end_connection(): the client retries.
+  void on_down(mqtt::Down cause, const std::string& why) override {
+    if (cause == mqtt::Down::Lost && !closing) log.warn("sparkplug: connection to " + client.uri() + " lost: " + why);
     went_down();
-    if (!running) return;
-    if (fell_back) {
-      log.warn("sparkplug: broker " + uri + " refuses MQTT 5, falling back to 3.1.1");
-      connect();
-      return;
-    }
-    if (failures == 0 || log.enabled(LogLevel::Debug))
-      log.warn("sparkplug: connect to " + uri + " refused (code " + std::to_string(code) + "), retrying");
-    schedule_retry();
-  }
-
-  void on_lost(const std::string& why, bool was_up) override {
-    drop_connection();
-    if (!was_up) {
-      connecting = false;
-      went_down();
-      if (!running) return;
-      if (failures == 0 || log.enabled(LogLevel::Debug))
-        log.warn("sparkplug: connect to " + uri + " failed: " + why + ", retrying");
-      schedule_retry();
-      return;
-    }
-    if (connected && !closing) log.warn("sparkplug: connection to " + uri + " lost: " + why);
-    went_down();
-    schedule_retry();
   }
 
   void on_publish(const codec::Publish& p) override {
-    if (!running || !connected) return;
+    if (!client.running() || !client.connected()) return;
     const auto t = std::string_view(p.topic);
     const auto& prefix = edge.topic_prefix();
     if (t.starts_with(prefix) && (t.substr(prefix.size()).starts_with("NCMD/") ||
@@ -377,44 +224,37 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
     if (owner && owner->on_command && !cmd->items.empty()) owner->on_command(std::move(*cmd));
   }
 
-  void on_acked(std::uint64_t) override {}
   void on_rejected(std::uint64_t, std::uint8_t reason) override {
     log.warn("sparkplug: broker refused a message, reason " + std::to_string(reason));
   }
   void on_subscribe_refused(std::uint8_t code) override {
     log.warn("sparkplug: broker refused a subscription (NCMD/DCMD/STATE), code " + std::to_string(code));
   }
-  void on_batch_end(bool) override {}
 
   void stop(std::chrono::milliseconds timeout) {
-    if (!running) return;
-    running = false;
-    retry_timer.cancel();
-    session_timer.cancel();
-    if (conn && connected && !closing) {
-      // NDEATH and DISCONNECT in one synchronous write (facts A.4.6).
-      std::vector<Outgoing> out;
-      edge.stop(out, now_ms());
-      final_bytes.clear();
-      for (const auto& o : out) {
+    if (!client.running()) return;
+    // NDEATH and DISCONNECT in one synchronous write (facts A.4.6); after
+    // the edge node's own DISCONNECT the connection is just closed.
+    auto ndeath = [this](std::string& out) {
+      std::vector<Outgoing> list;
+      edge.stop(list, now_ms());
+      for (const auto& o : list) {
         if (o.kind == Outgoing::Kind::Publish) {
-          session.publish_final(final_bytes, o.topic, o.payload, o.qos, o.retain);
+          session.publish_final(out, o.topic, o.payload, o.qos, o.retain);
           ++counters.published;
           counters.bytes += o.payload.size();
           if (auto t = type_of(o.topic, edge.topic_prefix()))
             ++counters.published_by_type[static_cast<std::size_t>(*t)];
         } else if (o.kind == Outgoing::Kind::Disconnect) {
-          session.disconnect(final_bytes,
-                             session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);
+          session.disconnect(out, session.version() == codec::kMqtt5 ? mqtt::Session::kDisconnectWithWill : 0);
         }
       }
-      if (!conn->finish(final_bytes, timeout))
-        log.warn("sparkplug: disconnect did not complete; the broker sends the Will (NDEATH)");
-      conn.reset();
-    } else {
-      drop_connection();
-    }
-    session.close();
+    };
+    std::function<void(std::string&)> last_words;
+    if (!closing) last_words = ndeath;
+    const auto farewell = client.stop(timeout, last_words);
+    if (farewell == mqtt::Client::Farewell::NotSent)
+      log.warn("sparkplug: disconnect did not complete; the broker sends the Will (NDEATH)");
     went_down();
   }
 };
@@ -435,9 +275,14 @@ EdgeSession& EdgeClient::edge() { return impl_->edge; }
 const EdgeSession& EdgeClient::edge() const { return impl_->edge; }
 void EdgeClient::send(std::vector<Outgoing>& out) { impl_->send(out); }
 std::uint64_t EdgeClient::now_ms() const { return impl_->now_ms(); }
-bool EdgeClient::connected() const { return impl_->connected; }
-int EdgeClient::mqtt_version() const { return impl_->connected ? impl_->session.version() : 0; }
-EdgeClient::Counters EdgeClient::counters() const { return impl_->counters; }
+bool EdgeClient::connected() const { return impl_->client.connected(); }
+int EdgeClient::mqtt_version() const { return impl_->client.version(); }
+EdgeClient::Counters EdgeClient::counters() const {
+  Counters c = impl_->counters;
+  c.connects = impl_->client.connects();
+  c.reconnects = impl_->client.reconnects();
+  return c;
+}
 const EdgeClientConfig& EdgeClient::config() const { return impl_->cfg; }
 
 void register_metrics(metrics::Registry& r, const std::unique_ptr<EdgeClient>& client) {

@@ -1,7 +1,7 @@
 // The Sparkplug B edge node on the network: one EdgeSession (sans-I/O,
-// edge_session.hpp) run over its own MQTT connection (mqtt::Session and
-// MqttConnection on the caller's io_context), beside the native publisher
-// (contract "Sparkplug B"; facts A.4).
+// edge_session.hpp) run over its own mqtt::Client (mqtt/client.hpp, the
+// publisher's client type, its own connection, on the caller's io_context),
+// beside the native publisher (contract "Sparkplug B"; facts A.4).
 //
 // Connection: its own client id, clean session / clean start with MQTT 5
 // Session Expiry 0, the Will from EdgeSession::connect_params() before every

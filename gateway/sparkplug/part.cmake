@@ -11,10 +11,10 @@ add_library(gateway_sparkplug STATIC
 target_include_directories(gateway_sparkplug PUBLIC ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_sparkplug PUBLIC canopen_core gateway_core_types canopen_pdo canopen_eds
                                         PRIVATE gateway_lib sparkplug_proto Boost::json canopen_json canopen_options)
-# The edge node on the network (edge_client.hpp): the Asio adapter running
-# the EdgeSession over the MQTT session and connection of gateway_mqtt. A
-# library of its own so gateway_sparkplug stays sans-I/O (no Asio, no
-# sockets) and its tests need no broker.
+# The edge node on the network (edge_client.hpp): the EdgeSession run over
+# its own MQTT client (mqtt/client.hpp, gateway_mqtt_client; not the
+# publisher's queue and storage). A library of its own so gateway_sparkplug
+# stays sans-I/O (no Asio, no sockets) and its tests need no broker.
 add_library(gateway_sparkplug_client STATIC ${CMAKE_CURRENT_LIST_DIR}/edge_client.cpp)
-target_link_libraries(gateway_sparkplug_client PUBLIC gateway_sparkplug gateway_mqtt gateway_metrics gateway_lib
+target_link_libraries(gateway_sparkplug_client PUBLIC gateway_sparkplug gateway_mqtt_client gateway_metrics gateway_lib
                                                PRIVATE canopen_options)
