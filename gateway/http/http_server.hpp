@@ -1,6 +1,6 @@
 // HTTP/1.1 + WebSocket server of the gateway (REST, /api/v1/events, static
 // dashboard), on the process's single io_context. Beast stays inside
-// server.cpp; this header is light on purpose.
+// the server's own .cpp files; this header is light on purpose.
 //
 // Usage:
 //   HttpServer srv(ioc, cfg);           // throws on bad TLS files
