@@ -2,8 +2,8 @@
 //
 // The App runs on the in-process simulated demo network (canopen-gateway
 // --demo: CiA 402 drive on node 5) with its HttpServer and every API route
-// (register_api_routes, the authorizer as canopen-gateway installs it, rate
-// limit off) on an ephemeral 127.0.0.1 port; one io_context thread runs
+// (install_http_api: the routes and the authorizer as canopen-gateway
+// installs them, rate limit off) on an ephemeral 127.0.0.1 port; one io_context thread runs
 // them, as in the gateway. The client, on the main thread, sends N
 // expedited SDO reads over ONE keep-alive connection, one at a time:
 //   GET /api/v1/networks/1/nodes/5/sdo/1017/0   (u16, producer heartbeat time)
@@ -35,6 +35,8 @@
 #include <thread>
 #include <vector>
 
+#include "app.hpp"
+#include "front_ends.hpp"
 #include "log.hpp"
 #include "request_codec.hpp"
 #include "rest_api.hpp"
@@ -151,8 +153,7 @@ int main(int argc, char** argv) {
   hc.address = "127.0.0.1";
   hc.port = 0;
   http::HttpServer server(io, hc, &log);
-  server.set_authorizer(app.http_authorizer());
-  register_api_routes(server, app);
+  install_http_api(server, app);
   app.start();
   server.start();
   const auto port = server.bound_port();

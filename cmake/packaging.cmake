@@ -7,7 +7,7 @@
 # <prefix>/share/canopen-gateway/{web,eds,gateway.example.yaml},
 # <prefix>/lib/systemd/system/canopen-gateway.service and
 # <prefix>/share/doc/canopen-gateway. The installed gateway finds its
-# dashboard as <prefix>/share/canopen-gateway/web (gateway/main.cpp).
+# dashboard as <prefix>/share/canopen-gateway/web (gateway/app/process.cpp).
 # The package (prefix /usr) adds /etc/canopen-gateway/gateway.yaml as a
 # conffile, the service's system user and the unit enabled and started
 # (deploy/debian/). cpack only installs what is built: build first.

@@ -1,8 +1,11 @@
-// The gateway process minus main(): every configured network (SocketCAN or
+// The gateway minus its front ends: every configured network (SocketCAN or
 // the simulated demo bus) with the gateway's own CANopen device on it and
 // the master-side services watching the other nodes, the event pipeline,
-// and the outputs (log, MQTT, WebSocket). Requests from MQTT and REST are
-// executed by its request core (requests(), core/request_core.hpp).
+// and the outputs (log, MQTT, Sparkplug, extra consumers such as the
+// WebSocket stream). Requests from every front end are executed by its
+// request core (requests(), core/request_core.hpp); what they may read
+// besides is status() (status/view.hpp). Front ends are made from those two
+// in front_ends.hpp; only app/ and main.cpp include this header, and tests.
 //
 // Thread safety: everything runs on the one io_context given to the
 // constructor; call every method from that thread.
@@ -36,6 +39,7 @@
 #include "pipeline.hpp"
 #include "registry.hpp"
 #include "state_cache.hpp"
+#include "status/view.hpp"
 
 namespace canopen::eds {
 struct DeviceDescription;
@@ -77,6 +81,7 @@ class NetworkTrace;
 
 namespace gateway {
 
+class AppStatus;
 class MqttOutput;
 class SparkplugOutput;
 struct Composition;
@@ -182,14 +187,8 @@ class App {
   // unknown or real network.
   canopen::sim::Simulator* simulator(std::uint32_t net);
 
-  // Where a configured node's settings come from (GET /api/v1/gateway):
-  // "config" (the configuration file or flags; the demo's own), or
-  // "state-dir" (changed at run time) with the file that holds them.
-  struct NodeOrigin {
-    std::uint8_t node = 0;
-    std::string source;
-    std::string file;
-  };
+  // Where a configured node's settings come from (GET /api/v1/gateway).
+  using NodeOrigin = gateway::status::NodeOrigin;
   // The configured nodes of network `net` in node-ID order; empty for an unknown network.
   std::vector<NodeOrigin> node_origins(std::uint32_t net) const;
 
@@ -200,9 +199,13 @@ class App {
   // The process's metrics (/metrics). The App's components registered
   // their families when it was built, in the order /metrics writes them:
   // build info, the networks, the request core, events by kind, MQTT. The
-  // HTTP server and the uptime follow (register_metrics_route()). Render
+  // HTTP server and the uptime follow (install_http_api()). Render
   // and register on the io thread only; the App MUST outlive every render().
   metrics::Registry& metrics() { return metrics_; }
+
+  // What the front ends may read besides the request core (status/view.hpp):
+  // the accessors above, read-only. Valid as long as the App.
+  const gateway::status::View& status() const;
 
  private:
   using Net = NetworkUnit;
@@ -214,8 +217,9 @@ class App {
   void log_event(const Net& net, const canopen::Event& ev);
   // Writes one audit line ("audit: <line>", UTC time stamped, flushed at once).
   void audit(const std::string& line);
-  // The request core's view of the networks (core::Networks).
+  // The request core's view of the networks (core::Networks, core_networks.cpp).
   struct CoreNetworks;
+  static std::unique_ptr<core::Networks> make_core_networks(App& app);
   // Run-time node configuration for the request core (core::NodeSettings,
   // node_config.cpp): applies to the units, keeps in state-dir.
   struct NodeConfigs;
@@ -227,7 +231,7 @@ class App {
   metrics::Registry metrics_;
   // Declared before nets_: SDO transfers that end while the networks are
   // torn down still find the core.
-  std::unique_ptr<CoreNetworks> core_networks_;
+  std::unique_ptr<core::Networks> core_networks_;
   std::unique_ptr<NodeConfigs> node_configs_;
   core::RequestCore core_;
   EncodeContext encode_ctx_;
@@ -244,6 +248,7 @@ class App {
   std::unique_ptr<sparkplug::EdgeClient> sparkplug_;
   // Its CANopen side; after sparkplug_: it holds the client's EdgeSession.
   std::unique_ptr<SparkplugOutput> sparkplug_out_;
+  std::unique_ptr<AppStatus> status_;  // over this App's accessors
   bool started_ = false;
   bool stopped_ = false;
 };

@@ -38,11 +38,11 @@ double tidy(float f) {
   return d;
 }
 
-void get_history(App& app, const Request& req, Responder respond) {
+void get_history(const status::View& status, const Request& req, Responder respond) {
   if (accepts_only_protobuf(req)) return respond(json_only_refusal());
   std::uint32_t net = 0;
   std::uint8_t node = 0;
-  if (auto err = check_net(app, req, net)) return respond(std::move(*err));
+  if (auto err = check_net(status, req, net)) return respond(std::move(*err));
   if (auto err = check_node(req, node, false)) return respond(std::move(*err));
   std::int64_t window = history::kDefaultWindow;
   if (auto w = req.query_param("window")) {
@@ -60,12 +60,12 @@ void get_history(App& app, const Request& req, Responder respond) {
     if (!parsed) return respond(Response::problem(400, error));
     objects = std::move(*parsed);
   }
-  const auto* h = app.value_history();
+  const auto* h = status.value_history();
   if (h == nullptr) return respond(Response::problem(404, "history is off (history.max-bytes: 0)"));
 
   const auto now = std::chrono::floor<std::chrono::seconds>(std::chrono::system_clock::now());
   const auto result = h->query(net, node, objects, window, now);
-  const auto* desc = app.description(net, node);
+  const auto* desc = status.description(net, node);
   json::array series;
   for (const auto& s : result.series) {
     json::object o;
@@ -154,9 +154,9 @@ std::optional<std::vector<history::ObjectId>> parse_history_objects(std::string_
   return out;
 }
 
-void register_history_routes(http::HttpServer& server, App& app) {
+void register_history_routes(http::HttpServer& server, const status::View& status) {
   server.add_route("GET", "/api/v1/networks/{net}/nodes/{node}/history",
-                   [a = &app](const Request& req, Responder respond) { get_history(*a, req, std::move(respond)); });
+                   [s = &status](const Request& req, Responder respond) { get_history(*s, req, std::move(respond)); });
 }
 
 }  // namespace gateway

@@ -1,5 +1,5 @@
 // The PDO value history route (issue 18; docs/reference/rest.md "PDO value
-// history"; role viewer), answered from the App's history
+// history"; role viewer), answered from the status view's history
 // (history/value_history.hpp):
 //
 //   GET /api/v1/networks/{net}/nodes/{node}/history?window=S[&objects=6401:01,6000:01]
@@ -10,7 +10,7 @@
 // window or list, 404 for an unknown network or with history off
 // (history.max-bytes: 0).
 //
-// Thread safety: io_context thread, as the server and the App.
+// Thread safety: io_context thread, as the server and the status view.
 #pragma once
 
 #include <optional>
@@ -18,13 +18,14 @@
 #include <string_view>
 #include <vector>
 
-#include "app.hpp"
+#include "history/value_history.hpp"
 #include "http_server.hpp"
+#include "status/view.hpp"
 
 namespace gateway {
 
-// Adds the route. `app` MUST outlive the server's use of it.
-void register_history_routes(http::HttpServer& server, App& app);
+// Adds the route. `status` MUST outlive the server's use of it.
+void register_history_routes(http::HttpServer& server, const status::View& status);
 
 // "6401:01,6000:01" -> the objects; nullopt (and `error` says why) for an
 // empty item, a missing colon or other than 4 + 2 hex digits.

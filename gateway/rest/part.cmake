@@ -1,8 +1,10 @@
 # REST API under /api/v1 (../shared/api-contract.md): routes on the
-# HttpServer that answer from the App's state cache and EDS/DCF files or
-# decode SDO, NMT, RPDO, SYNC and PDO-read requests for the request core
-# (core/request_core.hpp); /metrics; the OpenAPI
-# document (openapi.json, built into the binary).
+# HttpServer that answer from the status view (status/view.hpp: state
+# cache, EDS/DCF files, ...) or decode SDO, NMT, RPDO, SYNC, LSS,
+# configuration and maintenance requests for the request core
+# (core/request_core.hpp); /metrics; the OpenAPI document (openapi.json,
+# built into the binary). It does not link the App (gateway_app): the
+# composition (app/front_ends.*) hands it the core and the view.
 
 # Request decoding that needs no App (path numbers, RPDO body): its own
 # library so the fuzz build links it without the server and the App.
@@ -21,11 +23,17 @@ set_source_files_properties(${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp
 
 add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/rest_api.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/status_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/command_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/pdo_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/lss_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/config_routes.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/maintenance_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/route_checks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/api_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/trace_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/history_routes.cpp
   ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp)
 target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR})
-target_link_libraries(gateway_rest PUBLIC gateway_app gateway_core gateway_http gateway_messages gateway_edstool
+target_link_libraries(gateway_rest PUBLIC gateway_status gateway_core gateway_http gateway_messages gateway_edstool
                                    PRIVATE gateway_rest_parse gateway_metrics gateway_trace Boost::json canopen_json canopen_options)

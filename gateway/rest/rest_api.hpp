@@ -1,5 +1,7 @@
 // The REST API under /api/v1 (../shared/api-contract.md) as routes on the
-// HttpServer, answered by the App:
+// HttpServer: requests go to the request core (core/request_core.hpp), the
+// listings read the status view (status/view.hpp); nothing else of the
+// gateway is reachable from a route:
 //
 //   GET  /api/v1/gateway                                 version, uptime, node-ID, networks
 //   GET  /api/v1/networks/{net}                          bus state, counters, SYNC/TIME settings
@@ -38,30 +40,37 @@
 // The same routes, /metrics and /api/v1/openapi.json are described in
 // gateway/rest/openapi.json (built into the binary, served as is).
 //
-// Thread safety: handlers run on the io_context thread of server and app.
+// Thread safety: handlers run on the io_context thread of the server, the
+// core and the status view.
 #pragma once
 
 #include <string_view>
 
-#include "app.hpp"
+#include <boost/asio/io_context.hpp>
+
+#include "core/request_core.hpp"
 #include "http_server.hpp"
+#include "status/view.hpp"
 
 namespace gateway {
 
-// Adds the routes above. `app` must outlive the server's use of them.
-void register_rest_routes(http::HttpServer& server, App& app);
+// Adds the routes above. `core` and `status` MUST outlive the server's use of them.
+void register_rest_routes(http::HttpServer& server, core::RequestCore& core, const status::View& status);
 
-// GET /metrics: app.metrics() rendered in Prometheus text, after adding
-// the server's families and the uptime to it. Call once per App; `app` and
-// `server` MUST outlive the server's use of the route.
-void register_metrics_route(http::HttpServer& server, App& app);
+// GET /metrics: status.metrics_text(). The server's families and the uptime
+// are the composition's to register (app/front_ends.hpp). `status` MUST
+// outlive the server's use of the route.
+void register_metrics_route(http::HttpServer& server, const status::View& status);
 // GET /api/v1/openapi.json: openapi_document() as application/json.
 void register_openapi_route(http::HttpServer& server);
 
-// Every route of the gateway's API: the REST routes above, /metrics and
-// /api/v1/openapi.json. (/api/v1/events is the server's own WebSocket path;
-// "/" and the dashboard's files are its static directory.)
-void register_api_routes(http::HttpServer& server, App& app);
+// Every route of the gateway's API: the REST routes above, the trace and
+// history routes, /metrics and /api/v1/openapi.json. (/api/v1/events is the
+// server's own WebSocket path; "/" and the dashboard's files are its static
+// directory.) `io` is the one everything runs on (timers of live captures).
+// All three MUST outlive the server's use of the routes.
+void register_api_routes(http::HttpServer& server, core::RequestCore& core, const status::View& status,
+                         boost::asio::io_context& io);
 
 // The OpenAPI 3.0 document of the API (gateway/rest/openapi.json).
 std::string_view openapi_document();

@@ -1,5 +1,9 @@
 #include "route_checks.hpp"
 
+#include <boost/json/serialize.hpp>
+
+#include "auth.hpp"
+#include "core/format.hpp"
 #include "json_text.hpp"
 #include "request_codec.hpp"
 #include "rest_parse.hpp"
@@ -54,14 +58,14 @@ std::optional<std::uint8_t> path_node(const Request& req, bool allow_zero, std::
   return static_cast<std::uint8_t>(*n);
 }
 
-std::optional<Response> check_net(const App& app, const Request& req, std::uint32_t& net, bool protobuf) {
+std::optional<Response> check_net(const status::View& status, const Request& req, std::uint32_t& net, bool protobuf) {
   std::string error;
   auto n = path_network(req, error);
   if (!n) return problem_response(400, error, protobuf);
-  if (*n == 0 || *n > app.config().networks.size())
+  if (*n == 0 || *n > status.networks().size())
     return problem_response(404,
                             "network " + std::to_string(*n) + " is not configured (networks are 1.." +
-                                std::to_string(app.config().networks.size()) + ")",
+                                std::to_string(status.networks().size()) + ")",
                             protobuf);
   net = *n;
   return std::nullopt;
@@ -80,6 +84,42 @@ std::string timestamp_text(WallTime t) {
   detail::append_timestamp(out, detail::to_unix_time(t));
   if (out.size() >= 2 && out.front() == '"') out = out.substr(1, out.size() - 2);
   return out;
+}
+
+Response json_response(const boost::json::value& v, int status) {
+  return Response::json(boost::json::serialize(v), status);
+}
+
+std::string hex_text(std::span<const std::uint8_t> bytes) { return core::hex_bytes(bytes); }
+
+core::Caller rest_caller(const Request& req) {
+  core::Caller c;
+  c.transport = core::Transport::rest;
+  c.authenticated = true;
+  c.who = req.who;
+  c.key = req.caller.empty() ? auth::address_caller(auth::peer_address(req.peer)) : req.caller;
+  c.role = req.authorized ? static_cast<Role>(req.role) : Role::Admin;
+  return c;
+}
+
+std::optional<std::uint32_t> path_network(const Request& req, http::Responder& respond, bool protobuf) {
+  std::string error;
+  auto n = path_network(req, error);  // the other overload
+  if (!n) respond(problem_response(400, error, protobuf));
+  return n;
+}
+
+core::Request core_request(const Request& req, std::uint32_t net, core::Command command) {
+  core::Request r;
+  r.caller = rest_caller(req);
+  r.network = net;
+  r.command = std::move(command);
+  r.check_bus = true;  // REST answers 503 while the bus is off or down
+  return r;
+}
+
+core::Undecodable undecodable(core::Operation op, std::uint8_t node, std::string detail, bool in_address) {
+  return core::Undecodable{op, node, std::move(detail), in_address};
 }
 
 }  // namespace gateway

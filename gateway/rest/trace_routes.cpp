@@ -20,13 +20,13 @@ using http::Response;
 using trace::NetworkTrace;
 
 // The network of the path: its tap, or the problem to answer.
-std::shared_ptr<NetworkTrace> path_tap(App& app, const Request& req, Response& problem) {
+std::shared_ptr<NetworkTrace> path_tap(const status::View& status, const Request& req, Response& problem) {
   std::uint32_t net = 0;
-  if (auto err = check_net(app, req, net)) {
+  if (auto err = check_net(status, req, net)) {
     problem = std::move(*err);
     return nullptr;
   }
-  return app.frame_tap(net);  // every configured network has one
+  return status.frame_tap(net);  // every configured network has one
 }
 
 // One trace WebSocket client: its filter and bounded queue, fed by the tap.
@@ -73,9 +73,9 @@ class TraceSession final : public http::StreamSource, public std::enable_shared_
   std::uint64_t id_ = 0;
 };
 
-http::StreamAccept trace_stream(App& app, const Request& req) {
+http::StreamAccept trace_stream(const status::View& status, const Request& req) {
   http::StreamAccept out;
-  auto tap = path_tap(app, req, out.refusal);
+  auto tap = path_tap(status, req, out.refusal);
   if (!tap) return out;
   if (tap->clients() >= kMaxTraceClients) {
     out.refusal = Response::problem(503, "network " + std::string(req.param("net")) + " already has " +
@@ -197,9 +197,9 @@ class LiveCapture : public std::enable_shared_from_this<LiveCapture> {
   std::uint64_t received_ = 0, dropped_ = 0;
 };
 
-void capture(App& app, const Request& req, Responder respond) {
+void capture(const status::View& status, boost::asio::io_context& io, const Request& req, Responder respond) {
   Response problem;
-  auto tap = path_tap(app, req, problem);
+  auto tap = path_tap(status, req, problem);
   if (!tap) return respond(std::move(problem));
   bool candump = false;
   if (auto f = req.query_param("format")) {
@@ -227,7 +227,7 @@ void capture(App& app, const Request& req, Responder respond) {
   // Answered at once (so no handler timeout applies); the body follows.
   Response r = capture_head(candump, net);
   r.stream_buffer_bytes = kCaptureStreamBuffer;
-  r.stream = [&io = app.io(), weak = std::weak_ptr<NetworkTrace>(tap), candump,
+  r.stream = [&io, weak = std::weak_ptr<NetworkTrace>(tap), candump,
               duration = std::chrono::seconds(*n)](std::shared_ptr<http::BodySink> sink) {
     std::make_shared<LiveCapture>(io, weak, std::move(sink), candump)->start(duration);
   };
@@ -266,11 +266,12 @@ boost::json::object capture_json(const NetworkTrace& tap) {
   return o;
 }
 
-void register_trace_routes(http::HttpServer& server, App& app) {
-  App* a = &app;
-  server.add_stream_route("/api/v1/networks/{net}/trace", [a](const Request& req) { return trace_stream(*a, req); });
-  server.add_route("GET", "/api/v1/networks/{net}/capture",
-                   [a](const Request& req, Responder respond) { capture(*a, req, std::move(respond)); });
+void register_trace_routes(http::HttpServer& server, const status::View& status, boost::asio::io_context& io) {
+  const auto* s = &status;
+  server.add_stream_route("/api/v1/networks/{net}/trace", [s](const Request& req) { return trace_stream(*s, req); });
+  server.add_route("GET", "/api/v1/networks/{net}/capture", [s, io = &io](const Request& req, Responder respond) {
+    capture(*s, *io, req, std::move(respond));
+  });
 }
 
 }  // namespace gateway

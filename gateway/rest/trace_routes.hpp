@@ -12,16 +12,17 @@
 //                                       come, up to kMaxCaptureSeconds),
 //                                       &format=pcapng (default) | candump
 //
-// Thread safety: io_context thread, as the server and the App.
+// Thread safety: io_context thread, as the server and the status view.
 #pragma once
 
+#include <boost/asio/io_context.hpp>
 #include <boost/json/object.hpp>
 #include <cstddef>
 #include <cstdint>
 
-#include "app.hpp"
 #include "trace/network_trace.hpp"
 #include "http_server.hpp"
+#include "status/view.hpp"
 
 namespace gateway {
 
@@ -31,9 +32,10 @@ inline constexpr std::size_t kMaxTraceClients = 8;
 inline constexpr std::uint32_t kMaxCaptureSeconds = 3600;
 inline constexpr std::size_t kCaptureStreamBuffer = 1u << 20;
 
-// Adds the two routes. `app` MUST outlive the server's use of them; trace
-// sessions that outlive the App find its networks gone and end quietly.
-void register_trace_routes(http::HttpServer& server, App& app);
+// Adds the two routes; live captures time themselves on `io`. `status` and
+// `io` MUST outlive the server's use of them; trace sessions that outlive
+// the gateway find its networks gone and end quietly.
+void register_trace_routes(http::HttpServer& server, const status::View& status, boost::asio::io_context& io);
 
 // GET /api/v1/networks/{net}'s "busLoad": {"percent1s", "percent10s",
 // "bitrate"}, the percents rounded to 0.1 and null with "reason" when no

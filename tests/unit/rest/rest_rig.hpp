@@ -1,6 +1,7 @@
 // Test rig for the REST tests: the whole gateway (App) on the simulated
 // demo network (nodes 5: CiA 402 drive, 10 and 11: CiA 401 I/O) with an
-// HttpServer carrying register_api_routes() on an ephemeral 127.0.0.1 port.
+// HttpServer carrying the API as canopen-gateway installs it
+// (install_http_api(), app/front_ends.hpp) on an ephemeral 127.0.0.1 port.
 // The client is a plain blocking socket on its own thread (one request per
 // connection, "Connection: close"; no Beast); the test thread runs the
 // io_context meanwhile.
@@ -21,6 +22,8 @@
 #include <thread>
 #include <vector>
 
+#include "app.hpp"
+#include "front_ends.hpp"
 #include "log.hpp"
 #include "rest_api.hpp"
 #include "unit/support/http_fetch.hpp"
@@ -57,9 +60,9 @@ struct RestRig {
     hc.port = 0;
     hc.static_dir = static_dir;
     server = std::make_unique<http::HttpServer>(io, hc);
-    // The authorizer as canopen-gateway installs it (demo: auth off, everyone admin).
-    server->set_authorizer(app->http_authorizer());
-    register_api_routes(*server, *app);
+    // The authorizer and the routes as canopen-gateway installs them (demo:
+    // auth off, everyone admin).
+    install_http_api(*server, *app);
     if (before_start) before_start(*app);
     app->start();
     server->start();

@@ -1,0 +1,41 @@
+#include "front_ends.hpp"
+
+#include <chrono>
+
+#include "ascii/ascii_lss.hpp"
+#include "http_metrics.hpp"
+#include "metrics.hpp"
+#include "rest_api.hpp"
+
+namespace gateway {
+
+void install_http_api(http::HttpServer& server, App& app) {
+  server.set_authorizer(app.http_authorizer());
+  // The server's families and the uptime come last, as /metrics has always
+  // had them (after the App's own, app.hpp).
+  http::register_metrics(app.metrics(), server);
+  metrics::register_uptime(app.metrics(), [started = app.started_at()] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  });
+  register_api_routes(server, app.requests(), app.status(), app.io());
+}
+
+void connect_event_stream(http::HttpServer& server, App& app) {
+  app.add_consumer([srv = &server](const EncodedEventPtr& ev) { srv->publish(ev); });
+  app.set_protobuf_demand([srv = &server] { return srv->binary_clients() > 0; });
+}
+
+std::unique_ptr<ascii::Server> make_ascii_server(boost::asio::io_context& io, App& app, Logger& log) {
+  const auto& config = app.config();
+  ascii::ServerConfig a;
+  a.listen = config.ascii.listen;
+  a.role = config.ascii.role;
+  a.idle_timeout = config.ascii.idle_timeout;
+  a.max_clients = config.ascii.max_clients;
+  a.networks = static_cast<std::uint32_t>(config.networks.size());
+  auto server = std::make_unique<ascii::Server>(io, std::move(a), app.requests(), &log);
+  server->set_lss_handler(ascii::make_lss_handler(app.requests()));
+  return server;
+}
+
+}  // namespace gateway
