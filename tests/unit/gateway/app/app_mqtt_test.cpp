@@ -12,7 +12,7 @@
 
 #include "app.hpp"
 #include "mqtt/publisher.hpp"
-#include "unit/mqtt/mqtt_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {
 namespace {

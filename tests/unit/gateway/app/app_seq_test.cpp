@@ -13,7 +13,7 @@
 
 #include "app.hpp"
 #include "seq_store.hpp"
-#include "unit/mqtt/mqtt_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {
 namespace {

@@ -8,7 +8,7 @@
 
 #include "app.hpp"
 #include "sparkplug/edge_client.hpp"
-#include "unit/mqtt/mqtt_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {
 namespace {

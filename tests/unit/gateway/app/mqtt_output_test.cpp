@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "unit/mqtt/mqtt_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {
 namespace {

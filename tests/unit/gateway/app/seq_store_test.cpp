@@ -8,7 +8,7 @@
 #include <set>
 #include <string>
 
-#include "unit/mqtt/mqtt_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {
 namespace {

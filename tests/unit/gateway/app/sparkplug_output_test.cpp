@@ -12,7 +12,7 @@
 
 #include "support/fake_networks.hpp"
 #include "support/memory_log.hpp"
-#include "unit/sparkplug/sparkplug_support.hpp"
+#include "unit/gateway/sparkplug/sparkplug_support.hpp"
 
 namespace gateway {
 namespace {

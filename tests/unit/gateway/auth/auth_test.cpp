@@ -51,7 +51,7 @@ TEST(Roles, EachRouteNeedsItsRole) {
 }
 
 TEST(Roles, RequestsNeedTheirRoleAndResetsNeedAdmin) {
-  // The roles of the request core's commands: tests/unit/core/request_test.cpp.
+  // The roles of the request core's commands: tests/unit/gateway/core/request_test.cpp.
   EXPECT_TRUE(allows(Role::Admin, Role::Operator));
   EXPECT_FALSE(allows(Role::Viewer, Role::Operator));
   EXPECT_FALSE(allows(Role::None, Role::Viewer));

@@ -14,7 +14,7 @@
 #include <thread>
 
 #include "auth.hpp"
-#include "unit/rest/rest_rig.hpp"
+#include "unit/gateway/rest/rest_rig.hpp"
 #include "request_codec.hpp"
 #include "support/memory_log.hpp"
 #include "support/mqtt_request.hpp"

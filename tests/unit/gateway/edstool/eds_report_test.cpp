@@ -21,7 +21,7 @@ using ::testing::HasSubstr;
 using ::testing::StartsWith;
 
 const std::filesystem::path kSource = CANOPEN_SOURCE_DIR;
-const std::string kQuirks = (kSource / "tests/unit/eds/data/quirks").string();
+const std::string kQuirks = (kSource / "tests/support/eds/quirks").string();
 const std::string kDrive = (kSource / "deploy/eds/cia402-drive.eds").string();
 
 TEST(EdsCheck, CleanFileIsOneOkLine) {

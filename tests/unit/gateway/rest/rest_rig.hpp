@@ -23,7 +23,7 @@
 
 #include "log.hpp"
 #include "rest_api.hpp"
-#include "unit/support/http_fetch.hpp"
+#include "unit/gateway/rest/http_fetch.hpp"
 
 namespace gateway::test {
 

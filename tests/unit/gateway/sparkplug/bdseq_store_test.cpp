@@ -10,7 +10,7 @@
 
 #include <fstream>
 
-#include "unit/sparkplug/sparkplug_support.hpp"
+#include "unit/gateway/sparkplug/sparkplug_support.hpp"
 
 namespace gateway::sparkplug {
 namespace {

@@ -6,8 +6,8 @@
 
 #include <gtest/gtest.h>
 
-#include "unit/mqtt/mqtt_support.hpp"
-#include "unit/sparkplug/sparkplug_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
+#include "unit/gateway/sparkplug/sparkplug_support.hpp"
 
 namespace gateway::sparkplug {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "sparkplug/edge_client.hpp"
 #include "support/memory_log.hpp"
-#include "unit/mqtt/mqtt_support.hpp"
+#include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway::sparkplug {
 namespace {

@@ -7,7 +7,7 @@
 
 #include <limits>
 
-#include "unit/sparkplug/sparkplug_support.hpp"
+#include "unit/gateway/sparkplug/sparkplug_support.hpp"
 
 namespace gateway::sparkplug {
 namespace {

@@ -33,7 +33,7 @@ struct Seen {
 struct MasterAndDevice {
   MasterAndDevice()
       : device_od(eds::load_device_description(source_path("deploy/eds/cia402-drive.eds"), kNode).od),
-        dcf(eds::load_device_description(source_path("tests/unit/eds/data/cia402-drive-node5.dcf"))) {
+        dcf(eds::load_device_description(source_path("tests/support/eds/cia402-drive-node5.dcf"))) {
     EXPECT_FALSE(device_od.set(0x1018, 4, Value::of_unsigned(DataType::Unsigned32, kSerial)));
     DeviceConfig cfg;
     cfg.node_id = kNode;

@@ -1,5 +1,5 @@
 // What real vendor EDS/DCF files contain, one small file of the project's
-// own per quirk (tests/unit/eds/data/quirks/), each reproducing what was
+// own per quirk (tests/support/eds/quirks/), each reproducing what was
 // seen in public vendor files: the file is accepted, the warning names
 // file:line and what was assumed, and the dictionary holds what the file
 // unambiguously means. Refused are only files that cannot be read without

@@ -20,7 +20,7 @@ namespace canopen::eds::test {
 inline std::filesystem::path source_dir() { return CANOPEN_SOURCE_DIR; }
 inline std::filesystem::path deploy_eds(std::string_view name) { return source_dir() / "deploy" / "eds" / name; }
 inline std::filesystem::path test_data(std::string_view name) {
-  return source_dir() / "tests" / "unit" / "eds" / "data" / name;
+  return source_dir() / "tests" / "support" / "eds" / name;
 }
 
 inline std::string read_text(const std::filesystem::path& p) {

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "canopen/lss/frames.hpp"
-#include "unit/lss/lss_test_support.hpp"
+#include "unit/stack/lss/lss_test_support.hpp"
 
 namespace canopen::lss {
 namespace {

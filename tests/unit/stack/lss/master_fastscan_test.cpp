@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "canopen/lss/master.hpp"
-#include "unit/lss/lss_test_support.hpp"
+#include "unit/stack/lss/lss_test_support.hpp"
 
 namespace canopen::lss {
 namespace {

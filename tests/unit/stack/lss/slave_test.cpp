@@ -6,7 +6,7 @@
 #include <optional>
 
 #include "canopen/lss/slave.hpp"
-#include "unit/lss/lss_test_support.hpp"
+#include "unit/stack/lss/lss_test_support.hpp"
 
 namespace canopen::lss {
 namespace {

@@ -46,7 +46,7 @@ class Network {
  public:
   explicit Network(bool with_server = true)
       : device_od(eds::load_device_description(source_path("deploy/eds/cia402-drive.eds"), kNode).od),
-        dcf(eds::load_device_description(source_path("tests/unit/eds/data/cia402-drive-node5.dcf"))) {
+        dcf(eds::load_device_description(source_path("tests/support/eds/cia402-drive-node5.dcf"))) {
     // The drive on the bus is the one the DCF names.
     EXPECT_FALSE(device_od.set(0x1018, 4, Value::of_unsigned(DataType::Unsigned32, kSerial)));
     device_ep = bus.attach("device");
@@ -421,7 +421,7 @@ TEST(BootConfigurator, UnconfiguredNode_BootUpIgnored) {
 }
 
 TEST(BootConfigPlan, StoreRestoreAndReadOnlyEntriesNeverWritten_HeartbeatAlways) {
-  const auto dcf = eds::load_device_description(source_path("tests/unit/eds/data/cia402-drive-node5.dcf"));
+  const auto dcf = eds::load_device_description(source_path("tests/support/eds/cia402-drive-node5.dcf"));
   const auto plan = plan_configuration(dcf);
   bool heartbeat = false;
   for (const auto& w : plan) {

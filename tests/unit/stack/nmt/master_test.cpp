@@ -12,7 +12,7 @@
 #include "canopen/eds/eds.hpp"
 #include "canopen/nmt/master.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
-#include "unit/nmt/nmt_test_support.hpp"
+#include "unit/stack/nmt/nmt_test_support.hpp"
 
 namespace canopen::nmt {
 namespace {

@@ -11,7 +11,7 @@
 #include "canopen/clock.hpp"
 #include "canopen/nmt/slave.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
-#include "unit/nmt/nmt_test_support.hpp"
+#include "unit/stack/nmt/nmt_test_support.hpp"
 
 namespace canopen::nmt {
 namespace {

@@ -74,7 +74,7 @@ TEST(PdoEds, Pdo_Cia402TpdosDecodedByNameAndType) {
 
 TEST(PdoEds, Pdo_Cia402DcfParameterValuesOverrideMapping) {
   Fixture t;
-  auto dev = eds::load_device_description(source("tests/unit/eds/data/cia402-drive-node5.dcf"));
+  auto dev = eds::load_device_description(source("tests/support/eds/cia402-drive-node5.dcf"));
   EXPECT_TRUE(t.rx.add_node(5, std::move(dev.od)).empty());
   const PdoEvent& e = t.feed("285#3706F6FF");
   ASSERT_EQ(e.values.size(), 2U);

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "unit/pdo/pdo_test_util.hpp"
+#include "unit/stack/pdo/pdo_test_util.hpp"
 
 namespace canopen::pdo {
 namespace {

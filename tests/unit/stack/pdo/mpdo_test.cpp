@@ -4,7 +4,7 @@
 
 #include "canopen/clock.hpp"
 #include "canopen/pdo/receiver.hpp"
-#include "unit/pdo/pdo_test_util.hpp"
+#include "unit/stack/pdo/pdo_test_util.hpp"
 
 namespace canopen::pdo {
 namespace {

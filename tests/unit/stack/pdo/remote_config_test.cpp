@@ -16,7 +16,7 @@
 #include "canopen/pdo/transmitter.hpp"
 #include "canopen/sdo/client.hpp"
 #include "canopen/sdo/server.hpp"
-#include "unit/pdo/pdo_test_util.hpp"
+#include "unit/stack/pdo/pdo_test_util.hpp"
 
 namespace canopen::pdo {
 namespace {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "canopen/clock.hpp"
-#include "unit/pdo/pdo_test_util.hpp"
+#include "unit/stack/pdo/pdo_test_util.hpp"
 
 namespace canopen::pdo {
 namespace {

@@ -16,7 +16,7 @@
 #include "canopen/clock.hpp"
 #include "canopen/sdo/client.hpp"
 #include "canopen/sdo/server.hpp"
-#include "unit/sdo/sdo_test_support.hpp"
+#include "unit/stack/sdo/sdo_test_support.hpp"
 
 namespace canopen::sdo {
 namespace {

@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "unit/sdo/sdo_test_support.hpp"
+#include "unit/stack/sdo/sdo_test_support.hpp"
 
 namespace canopen::sdo {
 namespace {

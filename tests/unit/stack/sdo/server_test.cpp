@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "unit/sdo/sdo_test_support.hpp"
+#include "unit/stack/sdo/sdo_test_support.hpp"
 
 namespace canopen::sdo {
 namespace {
