@@ -6,6 +6,7 @@
 #include <boost/json/parse.hpp>
 #include <boost/json/serialize.hpp>
 
+#include "canopen/json_value.hpp"
 #include "canopen_gateway.pb.h"
 #include "google/protobuf/util/json_util.h"
 #include "request_codec.hpp"

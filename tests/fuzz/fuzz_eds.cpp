@@ -1,7 +1,7 @@
 // Fuzzes the EDS/DCF reader: any text either parses or raises EdsError with
 // a "file:line: reason" message; nothing else may escape, crash or leak.
 // fuzz-libs: canopen_eds
-// fuzz-seeds: deploy/eds tests/unit/eds/data
+// fuzz-seeds: deploy/eds tests/support/eds
 #include <cstddef>
 #include <cstdint>
 #include <string_view>

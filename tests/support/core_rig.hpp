@@ -1,5 +1,5 @@
 // A RequestCore on a FakeNetworks with its audit lines collected, and
-// helpers to build requests and read answers (tests/unit/core).
+// helpers to build requests and read answers (tests/unit/gateway/core).
 #pragma once
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // A fake core::Networks for tests of the request core and of the front
-// ends that drive it (tests/unit/core, tests/unit/app/sparkplug_output):
+// ends that drive it (tests/unit/gateway/core, tests/unit/gateway/app/sparkplug_output):
 // no App, no bus, no clock. SDO transfers wait in `pending` until the test
 // answer()s them; node `described` has the EDS/DCF `desc` (by default the
 // small one below; a test may replace both).

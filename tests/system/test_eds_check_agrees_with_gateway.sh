@@ -6,7 +6,7 @@
 . "$(dirname "$0")/lib.sh"
 EDS=$BUILD_DIR/gateway/canopen-eds
 SRC=${SOURCE_DIR:-$(dirname "$0")/../..}
-Q=$SRC/tests/unit/eds/data/quirks
+Q=$SRC/tests/support/eds/quirks
 CORPUS=$SRC/../shared/eds-corpus
 
 files="$Q/limits.eds $Q/inline-comments.eds $Q/unreadable-objects.eds $Q/nodeid-ff.dcf $Q/duplicates-conflict.eds

@@ -1,4 +1,0 @@
-canopen_unit_test(config_tests SOURCES ${U}/config/*_test.cpp LIBS gateway_config)
-if(TARGET config_tests)
-  target_compile_definitions(config_tests PRIVATE CANOPEN_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
-endif()

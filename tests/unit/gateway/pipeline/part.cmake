@@ -1,0 +1,1 @@
+canopen_unit_test(pipeline_tests SOURCES ${U}/gateway/pipeline/*_test.cpp LIBS gateway_pipeline)

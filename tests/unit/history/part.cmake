@@ -1,2 +1,0 @@
-# The PDO value history (gateway/history): buckets, breaks, tiers, bounds.
-canopen_unit_test(history_tests SOURCES ${U}/history/*_test.cpp LIBS gateway_history)

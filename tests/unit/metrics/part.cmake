@@ -1,1 +1,0 @@
-canopen_unit_test(metrics_tests SOURCES ${U}/metrics/*_test.cpp LIBS gateway_metrics)
