@@ -5,7 +5,7 @@
 #include <google/protobuf/util/json_util.h>
 
 #include "canopen_gateway.pb.h"
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 
 namespace {
 

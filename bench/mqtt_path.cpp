@@ -23,9 +23,9 @@
 #include "canopen/eds/eds.hpp"
 #include "canopen/network.hpp"
 #include "canopen/od/gateway_dictionary.hpp"
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 #include "log.hpp"
-#include "pipeline.hpp"
+#include "pipeline/pipeline.hpp"
 #include "mqtt/publisher.hpp"
 
 namespace {

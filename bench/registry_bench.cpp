@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 #ifdef CANOPEN_HAVE_PROMETHEUS_CPP
 #include <prometheus/counter.h>

@@ -35,11 +35,11 @@
 #include <thread>
 #include <vector>
 
-#include "app.hpp"
-#include "front_ends.hpp"
+#include "app/app.hpp"
+#include "app/front_ends.hpp"
 #include "log.hpp"
-#include "request_codec.hpp"
-#include "rest_api.hpp"
+#include "messages/request_codec.hpp"
+#include "rest/rest_api.hpp"
 
 namespace {
 

@@ -1,4 +1,4 @@
-#include "app.hpp"
+#include "app/app.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -9,18 +9,18 @@
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/link_monitor.hpp"
 #include "canopen/socketcan/service_driver.hpp"
-#include "app_status.hpp"
-#include "composition.hpp"
+#include "app/app_status.hpp"
+#include "app/composition.hpp"
 #include "core/core_metrics.hpp"
 #include "history/history_metrics.hpp"
 #include "core/format.hpp"
-#include "event_encoder.hpp"
-#include "mqtt_output.hpp"
+#include "messages/event_encoder.hpp"
+#include "app/mqtt_output.hpp"
 #include "sparkplug/edge_client.hpp"
-#include "node_configs.hpp"
-#include "sparkplug_output.hpp"
-#include "pipeline_metrics.hpp"
-#include "seq_store.hpp"
+#include "app/node_configs.hpp"
+#include "app/sparkplug_output.hpp"
+#include "pipeline/pipeline_metrics.hpp"
+#include "app/seq_store.hpp"
 
 #ifndef CANOPEN_GATEWAY_VERSION
 #define CANOPEN_GATEWAY_VERSION "0.0.0"

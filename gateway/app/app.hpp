@@ -28,17 +28,17 @@
 
 #include "canopen/can/bus_state.hpp"
 #include "canopen/can/channel.hpp"
-#include "auth.hpp"
+#include "auth/auth.hpp"
 #include "canopen/sdo/client.hpp"
-#include "config.hpp"
+#include "config/config.hpp"
 #include "core/request_core.hpp"
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 #include "event_message.hpp"
 #include "history/value_history.hpp"
 #include "log.hpp"
-#include "pipeline.hpp"
-#include "registry.hpp"
-#include "state_cache.hpp"
+#include "pipeline/pipeline.hpp"
+#include "metrics/registry.hpp"
+#include "pipeline/state_cache.hpp"
 #include "status/view.hpp"
 
 namespace canopen::eds {

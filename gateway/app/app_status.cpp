@@ -1,6 +1,6 @@
 #include "app/app_status.hpp"
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "sparkplug/edge_client.hpp"
 
 namespace gateway {

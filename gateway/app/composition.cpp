@@ -1,4 +1,4 @@
-#include "composition.hpp"
+#include "app/composition.hpp"
 
 #include <algorithm>
 #include <stdexcept>
@@ -7,8 +7,8 @@
 
 #include "canopen/socketcan/channel.hpp"
 #include "canopen/socketcan/link_monitor.hpp"
-#include "demo_devices.hpp"
-#include "node_overlay.hpp"
+#include "app/demo_devices.hpp"
+#include "app/node_overlay.hpp"
 #include "sim/asio_memory_bus.hpp"
 #include "sim/simulator.hpp"
 

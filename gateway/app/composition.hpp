@@ -13,9 +13,9 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "config.hpp"
+#include "config/config.hpp"
 #include "log.hpp"
-#include "network_unit.hpp"
+#include "app/network_unit.hpp"
 
 namespace canopen::socketcan {
 class LinkMonitor;

@@ -4,13 +4,13 @@
 // Thread safety: io thread only (App's).
 #include <memory>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "canopen/eds/eds.hpp"
 #include "canopen/master/dcf_transfer.hpp"
 #include "canopen/master/program_download.hpp"
 #include "canopen/network.hpp"
 #include "canopen/sdo/abort.hpp"
-#include "network_unit.hpp"
+#include "app/network_unit.hpp"
 
 namespace gateway {
 

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "canopen/eds/eds.hpp"
-#include "config.hpp"
+#include "config/config.hpp"
 
 namespace gateway {
 

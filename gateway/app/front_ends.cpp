@@ -1,11 +1,11 @@
-#include "front_ends.hpp"
+#include "app/front_ends.hpp"
 
 #include <chrono>
 
 #include "ascii/ascii_lss.hpp"
-#include "http_metrics.hpp"
-#include "metrics.hpp"
-#include "rest_api.hpp"
+#include "http/http_metrics.hpp"
+#include "metrics/metrics.hpp"
+#include "rest/rest_api.hpp"
 
 namespace gateway {
 

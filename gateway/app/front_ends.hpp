@@ -13,9 +13,9 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "ascii/ascii_server.hpp"
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 #include "log.hpp"
 
 namespace gateway {

@@ -1,6 +1,6 @@
-#include "mqtt_output.hpp"
+#include "app/mqtt_output.hpp"
 
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 #include "mqtt/mqtt_metrics.hpp"
 
 namespace gateway {

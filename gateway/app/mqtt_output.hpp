@@ -22,13 +22,13 @@
 
 #include <boost/asio/io_context.hpp>
 
-#include "config.hpp"
+#include "config/config.hpp"
 #include "core/request_core.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
 #include "mqtt/mqtt_requests.hpp"
 #include "mqtt/publisher.hpp"
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 namespace gateway {
 

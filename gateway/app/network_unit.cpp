@@ -1,4 +1,4 @@
-#include "network_unit.hpp"
+#include "app/network_unit.hpp"
 
 #include <algorithm>
 #include <utility>

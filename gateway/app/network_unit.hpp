@@ -31,9 +31,9 @@
 #include "canopen/network.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/socketcan/service_driver.hpp"
-#include "config.hpp"
+#include "config/config.hpp"
 #include "log.hpp"
-#include "seq_store.hpp"
+#include "app/seq_store.hpp"
 #include "trace/network_trace.hpp"
 #include "trace/tapped_channel.hpp"
 

@@ -3,10 +3,10 @@
 
 #include <boost/json/serialize.hpp>
 
-#include "network_unit.hpp"
-#include "node_configs.hpp"
-#include "node_overlay.hpp"
-#include "sparkplug_output.hpp"
+#include "app/network_unit.hpp"
+#include "app/node_configs.hpp"
+#include "app/node_overlay.hpp"
+#include "app/sparkplug_output.hpp"
 #include "state_file.hpp"
 
 namespace gateway {

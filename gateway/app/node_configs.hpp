@@ -10,7 +10,7 @@
 // Thread safety: io thread only (App's).
 #pragma once
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "core/node_settings.hpp"
 
 namespace gateway {

@@ -1,4 +1,4 @@
-#include "node_overlay.hpp"
+#include "app/node_overlay.hpp"
 
 #include <algorithm>
 #include <fstream>

@@ -17,7 +17,7 @@
 
 #include <boost/json/value.hpp>
 
-#include "config.hpp"
+#include "config/config.hpp"
 #include "log.hpp"
 
 namespace gateway {

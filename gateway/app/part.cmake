@@ -8,7 +8,7 @@ add_library(gateway_app STATIC ${CMAKE_CURRENT_LIST_DIR}/app.cpp ${CMAKE_CURRENT
                                ${CMAKE_CURRENT_LIST_DIR}/node_overlay.cpp ${CMAKE_CURRENT_LIST_DIR}/node_config.cpp
                                ${CMAKE_CURRENT_LIST_DIR}/core_networks.cpp ${CMAKE_CURRENT_LIST_DIR}/app_status.cpp
                                ${CMAKE_CURRENT_BINARY_DIR}/demo_devices.cpp)
-target_include_directories(gateway_app PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_include_directories(gateway_app PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${CMAKE_CURRENT_LIST_DIR}/..)
 target_compile_definitions(gateway_app PRIVATE CANOPEN_GATEWAY_VERSION="${PROJECT_VERSION}")
 target_link_libraries(gateway_app PUBLIC gateway_status gateway_config gateway_auth gateway_core gateway_pipeline gateway_messages gateway_mqtt gateway_sim gateway_sparkplug
                                          gateway_sparkplug_client gateway_trace gateway_history

@@ -1,4 +1,4 @@
-#include "process.hpp"
+#include "app/process.hpp"
 
 #include <pthread.h>
 #include <unistd.h>
@@ -13,14 +13,14 @@
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/signal_set.hpp>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "ascii/ascii_listen.hpp"
 #include "ascii/ascii_server.hpp"
 #include "canopen/socketcan/channel.hpp"
-#include "composition.hpp"
-#include "config.hpp"
-#include "front_ends.hpp"
-#include "http_server.hpp"
+#include "app/composition.hpp"
+#include "config/config.hpp"
+#include "app/front_ends.hpp"
+#include "http/http_server.hpp"
 #include "log.hpp"
 #include "mqtt/mqtt_connection.hpp"
 #include "mqtt/publisher.hpp"

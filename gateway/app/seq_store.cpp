@@ -1,4 +1,4 @@
-#include "seq_store.hpp"
+#include "app/seq_store.hpp"
 
 #include <algorithm>
 #include <string>

@@ -1,4 +1,4 @@
-#include "sparkplug_output.hpp"
+#include "app/sparkplug_output.hpp"
 
 #include <chrono>
 

@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "core/request.hpp"
-#include "http_types.hpp"
+#include "http/http_types.hpp"
 #include "role.hpp"
 
 namespace gateway {

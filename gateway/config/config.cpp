@@ -2,7 +2,7 @@
 // gateway's own keys (gateway:, history:); each component's section is
 // parsed in its own file (config_yaml.hpp lists them), merge() with the
 // command line is merge.cpp, check_state_dirs() state_dirs.cpp.
-#include "config.hpp"
+#include "config/config.hpp"
 
 #include <unistd.h>
 

@@ -11,7 +11,7 @@ add_library(gateway_config STATIC
   ${CMAKE_CURRENT_LIST_DIR}/ascii_yaml.cpp
   ${CMAKE_CURRENT_LIST_DIR}/merge.cpp
   ${CMAKE_CURRENT_LIST_DIR}/state_dirs.cpp)
-target_include_directories(gateway_config PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_include_directories(gateway_config PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${CMAKE_CURRENT_LIST_DIR}/..)
 # gateway_mqtt_codec: topic filters (mqtt.reply-topics); gateway_http_core: the Host/origin syntax
 # (request_checks.hpp) for http.host-names and allowed-origins; gateway_messages: object
 # indexes as the API writes them (parse_index_text) for sparkplug-metrics.

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "config.hpp"
+#include "config/config.hpp"
 
 namespace gateway {
 

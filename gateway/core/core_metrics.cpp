@@ -3,7 +3,7 @@
 #include <array>
 #include <vector>
 
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 
 namespace gateway::core {
 

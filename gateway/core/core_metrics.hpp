@@ -5,7 +5,7 @@
 #pragma once
 
 #include "core/request_core.hpp"
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 namespace gateway::core {
 

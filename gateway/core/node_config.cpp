@@ -8,7 +8,7 @@
 #include "canopen/eds/eds.hpp"
 #include "core/node_settings.hpp"
 #include "core/request_core.hpp"
-#include "eds_report.hpp"
+#include "edstool/eds_report.hpp"
 
 namespace gateway::core {
 

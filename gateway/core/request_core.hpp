@@ -44,7 +44,7 @@
 #include <variant>
 #include <vector>
 
-#include "auth.hpp"
+#include "auth/auth.hpp"
 #include "canopen/can/bus_state.hpp"
 #include "canopen/result.hpp"
 #include "canopen/sdo/client.hpp"

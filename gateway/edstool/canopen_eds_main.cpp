@@ -14,7 +14,7 @@
 #include <string_view>
 #include <vector>
 
-#include "eds_report.hpp"
+#include "edstool/eds_report.hpp"
 
 namespace {
 

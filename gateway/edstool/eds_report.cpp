@@ -1,4 +1,4 @@
-#include "eds_report.hpp"
+#include "edstool/eds_report.hpp"
 
 #include "core/format.hpp"
 

@@ -7,7 +7,7 @@
 #pragma once
 
 #include "history/value_history.hpp"
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 namespace gateway::history {
 

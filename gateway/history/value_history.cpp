@@ -1,4 +1,4 @@
-#include "value_history.hpp"
+#include "history/value_history.hpp"
 
 #include <algorithm>
 #include <limits>

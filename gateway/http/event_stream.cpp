@@ -1,4 +1,4 @@
-#include "event_stream.hpp"
+#include "http/event_stream.hpp"
 
 #include <algorithm>
 #include <boost/json/serialize.hpp>

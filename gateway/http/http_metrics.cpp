@@ -1,4 +1,4 @@
-#include "http_metrics.hpp"
+#include "http/http_metrics.hpp"
 
 namespace gateway::http {
 

@@ -4,9 +4,9 @@
 // Thread safety: as the registry's (one io_context thread).
 #pragma once
 
-#include "http_server.hpp"
-#include "metrics.hpp"
-#include "registry.hpp"
+#include "http/http_server.hpp"
+#include "metrics/metrics.hpp"
+#include "metrics/registry.hpp"
 
 namespace gateway::http {
 

@@ -6,7 +6,7 @@
 // everything else talks to it through http_server.hpp. Stream-independent
 // logic lives in the non-template bases (Connection, WsClient) so the two
 // stream types (TCP, TLS) duplicate as little code as possible.
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 
 #include <boost/asio/ssl.hpp>
 #include <memory>

@@ -33,8 +33,8 @@
 #include <vector>
 
 #include "event_message.hpp"
-#include "http_config.hpp"
-#include "http_types.hpp"
+#include "http/http_config.hpp"
+#include "http/http_types.hpp"
 
 namespace gateway {
 class Logger;

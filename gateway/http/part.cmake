@@ -11,7 +11,7 @@ add_library(gateway_http_core STATIC
   ${CMAKE_CURRENT_LIST_DIR}/request_checks.cpp
   ${CMAKE_CURRENT_LIST_DIR}/event_stream.cpp
   ${CMAKE_CURRENT_LIST_DIR}/static_files.cpp)
-target_include_directories(gateway_http_core PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_include_directories(gateway_http_core PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_http_core PUBLIC gateway_lib Boost::headers PRIVATE gateway_core_types gateway_json_wire Boost::json canopen_options)
 # The server (HttpServer, http_server.hpp); its internal headers
 # (server_impl.hpp, beast_types.hpp, connection.hpp, http_session.hpp,

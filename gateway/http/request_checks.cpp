@@ -1,4 +1,4 @@
-#include "request_checks.hpp"
+#include "http/request_checks.hpp"
 
 #include <boost/asio/ip/address.hpp>
 #include <stdexcept>

@@ -16,7 +16,7 @@
 #include <utility>
 #include <vector>
 
-#include "http_types.hpp"
+#include "http/http_types.hpp"
 
 namespace gateway::http {
 

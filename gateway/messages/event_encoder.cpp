@@ -1,4 +1,4 @@
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,8 +8,8 @@
 
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
-#include "json_text.hpp"
-#include "proto_value.hpp"
+#include "messages/json_text.hpp"
+#include "messages/proto_value.hpp"
 
 namespace gateway {
 

@@ -14,6 +14,6 @@ if(TARGET canopen_proto)
     ${CMAKE_CURRENT_LIST_DIR}/request_codec.cpp
     ${CMAKE_CURRENT_LIST_DIR}/json_text.cpp
     ${CMAKE_CURRENT_LIST_DIR}/proto_value.cpp)
-  target_include_directories(gateway_messages PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+  target_include_directories(gateway_messages PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${CMAKE_CURRENT_LIST_DIR}/..)
   target_link_libraries(gateway_messages PUBLIC canopen_proto canopen_json gateway_lib gateway_core_types gateway_json_wire PRIVATE canopen_options)
 endif()

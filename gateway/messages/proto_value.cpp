@@ -1,11 +1,11 @@
-#include "proto_value.hpp"
+#include "messages/proto_value.hpp"
 
 #include <charconv>
 #include <cmath>
 #include <variant>
 
 #include "canopen/json_value.hpp"
-#include "json_text.hpp"
+#include "messages/json_text.hpp"
 
 namespace gateway::detail {
 

@@ -1,4 +1,4 @@
-#include "request_codec.hpp"
+#include "messages/request_codec.hpp"
 
 #include <boost/json/parse.hpp>
 #include <boost/json/parse_options.hpp>
@@ -13,8 +13,8 @@
 #include "http_status.hpp"
 #include "google/protobuf/stubs/logging.h"
 #include "google/protobuf/util/json_util.h"
-#include "json_text.hpp"
-#include "proto_value.hpp"
+#include "messages/json_text.hpp"
+#include "messages/proto_value.hpp"
 
 namespace gateway {
 

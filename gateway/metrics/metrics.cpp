@@ -1,6 +1,6 @@
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 #include <array>
 #include <charconv>

@@ -43,7 +43,7 @@
 #include <string_view>
 #include <vector>
 
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 
 namespace gateway::metrics {
 

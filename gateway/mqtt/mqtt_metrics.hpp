@@ -5,10 +5,10 @@
 
 #include <memory>
 
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 #include "mqtt/mqtt_requests.hpp"
 #include "mqtt/publisher.hpp"
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 namespace gateway::mqtt {
 

@@ -45,7 +45,7 @@
 #include "core/request.hpp"
 #include "log.hpp"
 #include "mqtt/mqtt_codec.hpp"
-#include "request_codec.hpp"
+#include "messages/request_codec.hpp"
 
 namespace gateway::mqtt {
 

@@ -1,6 +1,6 @@
 #include "mqtt/publisher.hpp"
 
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 
 #include "mqtt/client.hpp"
 #include "mqtt/mqtt_codec.hpp"

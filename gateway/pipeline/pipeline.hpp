@@ -16,7 +16,7 @@
 
 #include "canopen/events.hpp"
 #include "event_message.hpp"
-#include "state_cache.hpp"
+#include "pipeline/state_cache.hpp"
 
 namespace gateway {
 

@@ -1,10 +1,10 @@
-#include "pipeline_metrics.hpp"
+#include "pipeline/pipeline_metrics.hpp"
 
 #include <map>
 #include <string>
 #include <utility>
 
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 
 namespace gateway {
 

@@ -7,9 +7,9 @@
 #include <functional>
 
 #include "canopen/can/channel.hpp"
-#include "pipeline.hpp"
-#include "registry.hpp"
-#include "state_cache.hpp"
+#include "pipeline/pipeline.hpp"
+#include "metrics/registry.hpp"
+#include "pipeline/state_cache.hpp"
 
 namespace gateway {
 

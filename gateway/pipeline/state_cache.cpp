@@ -1,4 +1,4 @@
-#include "state_cache.hpp"
+#include "pipeline/state_cache.hpp"
 
 #include <type_traits>
 #include <variant>

@@ -3,10 +3,10 @@
 #include <string>
 #include <utility>
 
-#include "metrics.hpp"
-#include "rest_api.hpp"
-#include "history_routes.hpp"
-#include "trace_routes.hpp"
+#include "metrics/metrics.hpp"
+#include "rest/rest_api.hpp"
+#include "rest/history_routes.hpp"
+#include "rest/trace_routes.hpp"
 
 namespace gateway {
 

@@ -1,6 +1,6 @@
 // SDO upload and download (JSON or protobuf), NMT, RPDO and SYNC: the path
 // and body decoded into one core::Request, the result encoded.
-#include "routes.hpp"
+#include "rest/routes.hpp"
 
 #include <boost/json/object.hpp>
 #include <boost/json/parse.hpp>
@@ -9,9 +9,9 @@
 #include "canopen/json_value.hpp"
 #include "canopen_gateway.pb.h"
 #include "google/protobuf/util/json_util.h"
-#include "request_codec.hpp"
-#include "rest_parse.hpp"
-#include "route_checks.hpp"
+#include "messages/request_codec.hpp"
+#include "rest/rest_parse.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway::rest {
 

@@ -2,13 +2,13 @@
 // maintenance"): GET (viewer) / PUT / DELETE .../config and PUT .../eds
 // (admin), through the request core (core/node_config.cpp; the App applies
 // and keeps them).
-#include "routes.hpp"
+#include "rest/routes.hpp"
 
 #include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
 #include <boost/json/parse.hpp>
 
-#include "route_checks.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway::rest {
 

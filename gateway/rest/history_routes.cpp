@@ -1,4 +1,4 @@
-#include "history_routes.hpp"
+#include "rest/history_routes.hpp"
 
 #include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
@@ -8,8 +8,8 @@
 
 #include "canopen/eds/eds.hpp"
 #include "core/format.hpp"
-#include "json_text.hpp"
-#include "route_checks.hpp"
+#include "messages/json_text.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway {
 

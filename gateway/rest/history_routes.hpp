@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "history/value_history.hpp"
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 #include "status/view.hpp"
 
 namespace gateway {

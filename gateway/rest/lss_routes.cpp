@@ -1,12 +1,12 @@
 // LSS (contract "LSS master (CiA 305), REST (role admin)"): fastscan,
 // configure, assign-all and the devices the last scan found, through the core.
-#include "routes.hpp"
+#include "rest/routes.hpp"
 
 #include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
 
-#include "rest_parse.hpp"
-#include "route_checks.hpp"
+#include "rest/rest_parse.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway::rest {
 

@@ -1,7 +1,7 @@
 // Remote maintenance (contract "Remote configuration and maintenance"):
 // DCF read-back and apply, store/restore, program download: decoded here,
 // decided by the core (maintenance.cpp), run by the network's services.
-#include "routes.hpp"
+#include "rest/routes.hpp"
 
 #include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
@@ -10,8 +10,8 @@
 
 #include "canopen/sdo/abort.hpp"
 #include "core/format.hpp"
-#include "rest_parse.hpp"
-#include "route_checks.hpp"
+#include "rest/rest_parse.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway::rest {
 

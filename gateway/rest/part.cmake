@@ -9,7 +9,7 @@
 # Request decoding that needs no App (path numbers, RPDO body): its own
 # library so the fuzz build links it without the server and the App.
 add_library(gateway_rest_parse STATIC ${CMAKE_CURRENT_LIST_DIR}/rest_parse.cpp)
-target_include_directories(gateway_rest_parse PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_include_directories(gateway_rest_parse PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_rest_parse PUBLIC canopen_pdo canopen_od gateway_messages gateway_core_types
                                          PRIVATE Boost::json canopen_json canopen_options)
 
@@ -34,6 +34,6 @@ add_library(gateway_rest STATIC
   ${CMAKE_CURRENT_LIST_DIR}/trace_routes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/history_routes.cpp
   ${CMAKE_CURRENT_BINARY_DIR}/openapi_document.cpp)
-target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR})
+target_include_directories(gateway_rest PUBLIC ${CMAKE_CURRENT_LIST_DIR} ${CMAKE_CURRENT_LIST_DIR}/..)
 target_link_libraries(gateway_rest PUBLIC gateway_status gateway_core gateway_http gateway_messages gateway_edstool
                                    PRIVATE gateway_rest_parse gateway_metrics gateway_trace Boost::json canopen_json canopen_options)

@@ -1,6 +1,6 @@
 // The PDO configuration in effect (issue 11): GET .../pdo from the status
 // view, POST .../pdo/read through the request core, then as GET.
-#include "routes.hpp"
+#include "rest/routes.hpp"
 
 #include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
@@ -9,9 +9,9 @@
 #include "canopen/pdo/mapping.hpp"
 #include "canopen/pdo/remote_config.hpp"
 #include "canopen/sdo/abort.hpp"
-#include "json_text.hpp"
-#include "request_codec.hpp"
-#include "route_checks.hpp"
+#include "messages/json_text.hpp"
+#include "messages/request_codec.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway::rest {
 

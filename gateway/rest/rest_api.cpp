@@ -1,9 +1,9 @@
 // The route table of the REST API (rest_api.hpp); the handlers are in the
 // files of their resource (routes.hpp).
-#include "rest_api.hpp"
+#include "rest/rest_api.hpp"
 
-#include "route_checks.hpp"
-#include "routes.hpp"
+#include "rest/route_checks.hpp"
+#include "rest/routes.hpp"
 
 namespace gateway {
 

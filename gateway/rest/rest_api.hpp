@@ -49,7 +49,7 @@
 #include <boost/asio/io_context.hpp>
 
 #include "core/request_core.hpp"
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 #include "status/view.hpp"
 
 namespace gateway {

@@ -1,4 +1,4 @@
-#include "rest_parse.hpp"
+#include "rest/rest_parse.hpp"
 
 #include <boost/json/parse.hpp>
 #include <boost/json/value.hpp>
@@ -8,7 +8,7 @@
 #include <chrono>
 
 #include "canopen/json_value.hpp"
-#include "request_codec.hpp"
+#include "messages/request_codec.hpp"
 
 namespace gateway::rest {
 

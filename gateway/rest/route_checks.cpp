@@ -1,12 +1,12 @@
-#include "route_checks.hpp"
+#include "rest/route_checks.hpp"
 
 #include <boost/json/serialize.hpp>
 
-#include "auth.hpp"
+#include "auth/auth.hpp"
 #include "core/format.hpp"
-#include "json_text.hpp"
-#include "request_codec.hpp"
-#include "rest_parse.hpp"
+#include "messages/json_text.hpp"
+#include "messages/request_codec.hpp"
+#include "rest/rest_parse.hpp"
 
 namespace gateway {
 

@@ -17,8 +17,8 @@
 #include <variant>
 
 #include "core/request_core.hpp"
-#include "http_server.hpp"
-#include "request_codec.hpp"
+#include "http/http_server.hpp"
+#include "messages/request_codec.hpp"
 #include "status/view.hpp"
 
 namespace gateway {

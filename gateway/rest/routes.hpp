@@ -6,7 +6,7 @@
 #pragma once
 
 #include "core/request_core.hpp"
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 #include "status/view.hpp"
 
 namespace gateway::rest {

@@ -1,6 +1,6 @@
 // The listings (GET /api/v1/gateway, /networks/{net}, .../nodes, .../nodes/{node},
 // .../od, .../emcy), answered from the status view; JSON only.
-#include "routes.hpp"
+#include "rest/routes.hpp"
 
 #include <boost/json/array.hpp>
 #include <boost/json/object.hpp>
@@ -9,10 +9,10 @@
 #include "canopen/eds/eds.hpp"
 #include "canopen/json_value.hpp"
 #include "canopen/od/object_dictionary.hpp"
-#include "eds_report.hpp"
-#include "route_checks.hpp"
+#include "edstool/eds_report.hpp"
+#include "rest/route_checks.hpp"
 #include "trace/network_trace.hpp"
-#include "trace_routes.hpp"
+#include "rest/trace_routes.hpp"
 
 namespace gateway::rest {
 

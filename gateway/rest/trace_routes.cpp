@@ -1,4 +1,4 @@
-#include "trace_routes.hpp"
+#include "rest/trace_routes.hpp"
 
 #include <boost/asio/steady_timer.hpp>
 #include <chrono>
@@ -8,7 +8,7 @@
 
 #include "core/format.hpp"
 #include "trace/network_trace.hpp"
-#include "route_checks.hpp"
+#include "rest/route_checks.hpp"
 
 namespace gateway {
 

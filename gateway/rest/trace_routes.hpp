@@ -21,7 +21,7 @@
 #include <cstdint>
 
 #include "trace/network_trace.hpp"
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 #include "status/view.hpp"
 
 namespace gateway {

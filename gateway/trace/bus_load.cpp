@@ -1,4 +1,4 @@
-#include "bus_load.hpp"
+#include "trace/bus_load.hpp"
 
 #include <algorithm>
 

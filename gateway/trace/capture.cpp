@@ -1,4 +1,4 @@
-#include "capture.hpp"
+#include "trace/capture.hpp"
 
 #include <algorithm>
 #include <cstdio>

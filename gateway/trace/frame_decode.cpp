@@ -1,4 +1,4 @@
-#include "frame_decode.hpp"
+#include "trace/frame_decode.hpp"
 
 #include "canopen/lss/frames.hpp"
 #include "canopen/sdo/abort.hpp"

@@ -1,4 +1,4 @@
-#include "network_trace.hpp"
+#include "trace/network_trace.hpp"
 
 namespace gateway::trace {
 

@@ -19,10 +19,10 @@
 #include <span>
 #include <string>
 
-#include "bus_load.hpp"
-#include "capture.hpp"
-#include "frame_decode.hpp"
-#include "trace_stream.hpp"
+#include "trace/bus_load.hpp"
+#include "trace/capture.hpp"
+#include "trace/frame_decode.hpp"
+#include "trace/trace_stream.hpp"
 
 namespace gateway::trace {
 

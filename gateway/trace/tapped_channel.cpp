@@ -1,4 +1,4 @@
-#include "tapped_channel.hpp"
+#include "trace/tapped_channel.hpp"
 
 #include <chrono>
 

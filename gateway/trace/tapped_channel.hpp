@@ -9,7 +9,7 @@
 #pragma once
 
 #include "canopen/can/channel.hpp"
-#include "network_trace.hpp"
+#include "trace/network_trace.hpp"
 
 namespace gateway::trace {
 

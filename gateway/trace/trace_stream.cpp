@@ -1,4 +1,4 @@
-#include "trace_stream.hpp"
+#include "trace/trace_stream.hpp"
 
 #include <boost/json/serialize.hpp>
 #include <boost/json/value.hpp>

@@ -15,8 +15,8 @@
 #include <utility>
 #include <vector>
 
-#include "capture.hpp"
-#include "frame_decode.hpp"
+#include "trace/capture.hpp"
+#include "trace/frame_decode.hpp"
 
 namespace gateway::trace {
 

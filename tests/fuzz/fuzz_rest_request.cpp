@@ -25,10 +25,10 @@
 
 #include "canopen/eds/eds.hpp"
 #include "canopen/pdo/mapping.hpp"
-#include "event_stream.hpp"
-#include "request_codec.hpp"
-#include "rest_parse.hpp"
-#include "router.hpp"
+#include "http/event_stream.hpp"
+#include "messages/request_codec.hpp"
+#include "rest/rest_parse.hpp"
+#include "http/router.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include <memory>
 #include <set>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "mqtt/publisher.hpp"
 #include "unit/gateway/mqtt/mqtt_support.hpp"
 

@@ -15,7 +15,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "support/memory_log.hpp"
 
 namespace gateway {

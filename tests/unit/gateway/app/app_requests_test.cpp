@@ -2,8 +2,8 @@
 // simulated demo network in-process: who may queue how much on a node, MQTT
 // requests rate-limited per caller as HTTP ones are per address, and
 // tokenless MQTT requests refused unless mqtt.requests-role says otherwise.
-#include "app.hpp"
-#include "request_codec.hpp"
+#include "app/app.hpp"
+#include "messages/request_codec.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

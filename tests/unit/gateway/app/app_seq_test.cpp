@@ -11,8 +11,8 @@
 #include <memory>
 #include <vector>
 
-#include "app.hpp"
-#include "seq_store.hpp"
+#include "app/app.hpp"
+#include "app/seq_store.hpp"
 #include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {

@@ -6,7 +6,7 @@
 #include <fstream>
 #include <memory>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "sparkplug/edge_client.hpp"
 #include "unit/gateway/mqtt/mqtt_support.hpp"
 

@@ -2,7 +2,7 @@
 // devices boot, are identified and started, their TPDOs decoded into the
 // state cache and the event pipeline; SDO and NMT requests get their replies
 // (the same path MQTT and REST use: the request core). No CAN, no broker.
-#include "app.hpp"
+#include "app/app.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -14,7 +14,7 @@
 #include "canopen/can/memory_bus.hpp"
 
 #include "canopen/pdo/remote_config.hpp"
-#include "request_codec.hpp"
+#include "messages/request_codec.hpp"
 #include "support/mqtt_request.hpp"
 
 namespace gateway {

@@ -1,7 +1,7 @@
 // compose_networks (gateway/app/composition.cpp): the configuration becomes
 // one NetworkUnit per network, its channel opened - the simulated bus
 // handed to the unit like a SocketCAN channel.
-#include "composition.hpp"
+#include "app/composition.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -11,7 +11,7 @@
 #include <fstream>
 
 #include "canopen/socketcan/channel.hpp"
-#include "demo_devices.hpp"
+#include "app/demo_devices.hpp"
 #include "sim/asio_memory_bus.hpp"
 #include "sim/simulator.hpp"
 

@@ -2,7 +2,7 @@
 // the heartbeat rate limit per node, the heartbeat switch, and what a clean
 // stop sends last (the retained state topics deleted, the offline status).
 // The whole path against a real mosquitto is app_mqtt_test.cpp.
-#include "mqtt_output.hpp"
+#include "app/mqtt_output.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // NetworkUnit (gateway/app/network_unit.cpp): one network's channel, own
 // node (LocalNode), master side and driver wired together; here on the
 // simulated bus with its devices not started, a watcher on the bus.
-#include "network_unit.hpp"
+#include "app/network_unit.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "canopen/can/memory_bus.hpp"
-#include "composition.hpp"
+#include "app/composition.hpp"
 #include "sim/asio_memory_bus.hpp"
 
 namespace gateway {

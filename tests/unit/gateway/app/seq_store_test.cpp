@@ -1,6 +1,6 @@
 // SeqStore: the per-network seq kept in the state directory across restarts
 // (issue 12 item 4) without a write per event.
-#include "seq_store.hpp"
+#include "app/seq_store.hpp"
 
 #include <gtest/gtest.h>
 

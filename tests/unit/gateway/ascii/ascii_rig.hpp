@@ -21,7 +21,7 @@
 #include <memory>
 #include <string>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "ascii/ascii_server.hpp"
 #include "support/memory_log.hpp"
 

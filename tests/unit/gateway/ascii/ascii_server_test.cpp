@@ -25,7 +25,7 @@
 #include <memory>
 #include <string>
 
-#include "app.hpp"
+#include "app/app.hpp"
 #include "ascii_rig.hpp"
 
 namespace gateway::ascii {

@@ -1,7 +1,7 @@
 // gateway/auth: token hashes, the role of each route and request, the
 // per-client rate limit, per-caller queue shares, and how the bearer token
 // and the caller are taken from a request.
-#include "auth.hpp"
+#include "auth/auth.hpp"
 
 #include <gtest/gtest.h>
 

@@ -13,9 +13,9 @@
 #include <map>
 #include <thread>
 
-#include "auth.hpp"
+#include "auth/auth.hpp"
 #include "unit/gateway/rest/rest_rig.hpp"
-#include "request_codec.hpp"
+#include "messages/request_codec.hpp"
 #include "support/memory_log.hpp"
 #include "support/mqtt_request.hpp"
 

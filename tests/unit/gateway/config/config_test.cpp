@@ -1,7 +1,7 @@
 // Configuration file + command line (gateway/config/config.cpp): every key
 // reaches its field, flags win, and every mistake is one line naming file,
 // line, key and reason while nothing else is assumed.
-#include "config.hpp"
+#include "config/config.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "config.hpp"
+#include "config/config.hpp"
 
 namespace gateway {
 namespace {

@@ -2,7 +2,7 @@
 // RequestKind table) and the API names of NMT commands.
 #include "core/request.hpp"
 
-#include "auth.hpp"
+#include "auth/auth.hpp"
 
 #include <gtest/gtest.h>
 

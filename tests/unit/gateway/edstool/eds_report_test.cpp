@@ -1,7 +1,7 @@
 // canopen-eds (gateway/edstool): what it prints is the contract's format
 // (../shared/api-contract.md "Command line") and what it accepts is exactly
 // what the gateway's reader accepts; `show` prints the shape of GET .../od.
-#include "eds_report.hpp"
+#include "edstool/eds_report.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // The HTTP server's metrics as it registers them (gateway/http/http_metrics.hpp):
 // the families /metrics has always had, read from stats() at scrape time.
-#include "http_metrics.hpp"
+#include "http/http_metrics.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The header checks that stand between browsers (and smugglers) and the
 // API: Host and Origin policy, framing, body media type. The same rules over
 // a real socket are in server_test.cpp.
-#include "request_checks.hpp"
+#include "http/request_checks.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // HttpServer over real sockets on 127.0.0.1 (ephemeral port): the server
 // runs its io_context on a thread; the tests drive Beast clients with their
 // own io_context and a deadline on every operation, so nothing can hang.
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 
 #include "log.hpp"
 

@@ -20,7 +20,7 @@
 #include <thread>
 #include <type_traits>
 
-#include "http_server.hpp"
+#include "http/http_server.hpp"
 
 namespace {
 

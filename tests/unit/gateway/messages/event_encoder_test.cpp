@@ -17,8 +17,8 @@
 #include "canopen/json_value.hpp"
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
-#include "event_encoder.hpp"
-#include "json_text.hpp"
+#include "messages/event_encoder.hpp"
+#include "messages/json_text.hpp"
 
 namespace {
 

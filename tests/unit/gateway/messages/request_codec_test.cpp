@@ -7,7 +7,7 @@
 
 #include "canopen/sdo/abort.hpp"
 #include "canopen_gateway.pb.h"
-#include "request_codec.hpp"
+#include "messages/request_codec.hpp"
 
 namespace {
 

@@ -1,6 +1,6 @@
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 
-#include "registry.hpp"
+#include "metrics/registry.hpp"
 
 #include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // The pipeline's and the per-network metrics as their owners register them
 // (gateway/pipeline/pipeline_metrics.hpp): the same families /metrics has
 // always had, with values read at scrape time.
-#include "pipeline_metrics.hpp"
+#include "pipeline/pipeline_metrics.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <string>
 
 #include "canopen/can/memory_bus.hpp"
-#include "metrics.hpp"
+#include "metrics/metrics.hpp"
 
 namespace gateway {
 namespace {

@@ -1,7 +1,7 @@
 // Event pipeline (gateway/pipeline/): each event is encoded once and the
 // same message reaches every consumer; the state cache follows the stream;
 // the history ring keeps the newest events in order.
-#include "pipeline.hpp"
+#include "pipeline/pipeline.hpp"
 
 #include <gtest/gtest.h>
 

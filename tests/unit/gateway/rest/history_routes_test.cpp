@@ -10,7 +10,7 @@
 
 #include <filesystem>
 
-#include "history_routes.hpp"
+#include "rest/history_routes.hpp"
 #include "rest_rig.hpp"
 
 namespace gateway::test {

@@ -5,7 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
-#include "auth.hpp"
+#include "auth/auth.hpp"
 #include "rest_rig.hpp"
 
 namespace gateway {

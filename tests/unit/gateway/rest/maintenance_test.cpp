@@ -11,7 +11,7 @@
 #include <boost/crc.hpp>
 
 #include "canopen/eds/eds.hpp"
-#include "event_encoder.hpp"
+#include "messages/event_encoder.hpp"
 #include "rest_rig.hpp"
 
 namespace gateway {

@@ -11,8 +11,8 @@
 #include <string>
 #include <utility>
 
-#include "auth.hpp"
-#include "request_checks.hpp"
+#include "auth/auth.hpp"
+#include "http/request_checks.hpp"
 #include "rest_rig.hpp"
 
 namespace gateway {

@@ -8,7 +8,7 @@
 
 #include <mutex>
 
-#include "auth.hpp"
+#include "auth/auth.hpp"
 #include "rest_rig.hpp"
 #include "sim/simulator.hpp"
 

@@ -22,10 +22,10 @@
 #include <thread>
 #include <vector>
 
-#include "app.hpp"
-#include "front_ends.hpp"
+#include "app/app.hpp"
+#include "app/front_ends.hpp"
 #include "log.hpp"
-#include "rest_api.hpp"
+#include "rest/rest_api.hpp"
 #include "unit/gateway/rest/http_fetch.hpp"
 
 namespace gateway::test {

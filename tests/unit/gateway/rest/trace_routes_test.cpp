@@ -23,7 +23,7 @@
 #include <sstream>
 
 #include "rest_rig.hpp"
-#include "trace_routes.hpp"
+#include "rest/trace_routes.hpp"
 #include "trace/network_trace.hpp"
 
 namespace gateway::test {
