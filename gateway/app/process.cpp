@@ -22,6 +22,7 @@
 #include "app/front_ends.hpp"
 #include "http/http_server.hpp"
 #include "log.hpp"
+#include "mqtt/client.hpp"
 #include "mqtt/mqtt_connection.hpp"
 #include "mqtt/publisher.hpp"
 

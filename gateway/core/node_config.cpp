@@ -6,24 +6,12 @@
 #include <string>
 
 #include "canopen/eds/eds.hpp"
+#include "core/core_helpers.hpp"
 #include "core/node_settings.hpp"
 #include "core/request_core.hpp"
 #include "edstool/eds_report.hpp"
 
 namespace gateway::core {
-
-namespace {
-
-Problem bad_request(std::string detail) {
-  Problem p;
-  p.status = 400;
-  p.detail = std::move(detail);
-  return p;
-}
-
-std::string who_text(const Caller& c) { return c.who.empty() ? std::string("anonymous") : c.who; }
-
-}  // namespace
 
 void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Command& command, const Done& done) {
   const std::uint8_t node = std::visit(
@@ -39,7 +27,7 @@ void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Com
     return done(std::move(p));
   }
   if (node == net_.own_node_id(net)) {
-    return done(bad_request("node " + std::to_string(node) + " is the gateway's own node-ID on network " +
+    return done(detail::problem(400, "node " + std::to_string(node) + " is the gateway's own node-ID on network " +
                             std::to_string(net) + "; its settings are the network's (heartbeat-ms, sync, time)"));
   }
   if (std::holds_alternative<NodeConfigRead>(command)) return done(node_settings_->node_config(net, node));
@@ -60,7 +48,7 @@ void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Com
     const std::string name = e.file_name.empty() ? "node" + std::to_string(node) + ".eds" : e.file_name;
     what = "EDS/DCF " + name + " uploaded";
     if (e.text.empty()) {
-      result = bad_request(name + ": empty: the body is the EDS or DCF file");
+      result = detail::problem(400, name + ": empty: the body is the EDS or DCF file");
     } else {
       // As `canopen-eds check --node-id N` and the start-up read it: the
       // node's ID resolves $NODEID and wins over a DCF's NodeID.
@@ -71,16 +59,16 @@ void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Com
         result = node_settings_->write_node_eds(net, node, std::move(desc), e.text);
         if (auto* view = std::get_if<NodeConfigView>(&result)) view->warnings = std::move(warnings);
       } catch (const canopen::eds::EdsError& err) {
-        result = bad_request(err.what());
+        result = detail::problem(400, err.what());
       }
     }
   }
   if (const auto* p = std::get_if<Problem>(&result)) {
-    audit_("node configuration refused: " + who_text(caller) + ": " + where + ": " + what + ": " +
+    audit_("node configuration refused: " + detail::requester(caller.who) + ": " + where + ": " + what + ": " +
            std::to_string(p->status) + " " + p->detail);
   } else {
     const auto& v = std::get<NodeConfigView>(result);
-    audit_("node configuration: " + who_text(caller) + ": " + where + ": " + what + " (settings from " + v.source +
+    audit_("node configuration: " + detail::requester(caller.who) + ": " + where + ": " + what + " (settings from " + v.source +
            (v.file.empty() ? std::string() : " " + v.file) + ")");
   }
   done(std::move(result));

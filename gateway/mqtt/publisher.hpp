@@ -190,8 +190,4 @@ class MqttPublisher {
   std::shared_ptr<Impl> impl_;
 };
 
-// "tcp://h:1" stays; mqtt:// -> tcp://, mqtts:// -> ssl://. Throws
-// std::invalid_argument for any other scheme or an empty host (client.hpp).
-std::string normalize_server_uri(const std::string& uri);
-
 }  // namespace gateway::mqtt

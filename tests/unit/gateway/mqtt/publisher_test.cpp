@@ -1,6 +1,8 @@
 // MqttPublisher against a real mosquitto started by the fixture; requests
 // through the MqttRequests unit it hands them to (a fake request core).
 #include "mqtt/publisher.hpp"
+
+#include "mqtt/client.hpp"
 #include "support/memory_log.hpp"
 
 #include <gtest/gtest.h>
