@@ -11,14 +11,13 @@
 #include "canopen/socketcan/service_driver.hpp"
 #include "app/app_status.hpp"
 #include "app/composition.hpp"
-#include "core/core_metrics.hpp"
+#include "app/core_metrics.hpp"
 #include "history/history_metrics.hpp"
 #include "core/format.hpp"
 #include "messages/event_encoder.hpp"
 #include "app/mqtt_output.hpp"
-#include "sparkplug/edge_client.hpp"
 #include "app/node_configs.hpp"
-#include "app/sparkplug_output.hpp"
+#include "pipeline/stack_output.hpp"
 #include "pipeline/pipeline_metrics.hpp"
 #include "app/seq_store.hpp"
 
@@ -131,7 +130,7 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
                         });
     }
   }
-  core::register_metrics(metrics_, core_.counters());
+  register_core_metrics(metrics_, core_.counters());
   register_metrics(metrics_, pipeline_);
   if (config_.mqtt.enabled) {
     MqttOutput::Status status{std::string(version()), nets_.empty() ? std::uint8_t{127} : nets_.front()->cfg.node_id,
@@ -141,36 +140,10 @@ App::App(boost::asio::io_context& io, Config config, Logger& log, Composition ne
       status.networks.push_back(n->number);
       for (const auto& node : n->cfg.nodes) nodes.push_back({n->number, node.id});
     }
-    mqtt_ = std::make_unique<MqttOutput>(
-        io_, config_.mqtt, config_.gateway_id, log_, std::move(status), nodes,
-        [this](core::Request req, core::RequestCore::Done done) { core_.execute(std::move(req), std::move(done)); });
+    mqtt_ = std::make_unique<MqttOutput>(io_, config_.mqtt, config_.gateway_id, log_, std::move(status), nodes);
     mqtt_->register_metrics(metrics_);
   } else {
     metrics::register_mqtt(metrics_, {});
-  }
-  // Sparkplug B edge node (contract "Sparkplug B"): its own MQTT session.
-  if (config_.sparkplug.enabled) {
-    sparkplug::EdgeClientConfig sc;
-    sc.session = {config_.sparkplug.group_id, config_.sparkplug.edge_node_id, config_.sparkplug.primary_host_id};
-    sc.mqtt = config_.sparkplug.mqtt;
-    sc.state_dir = config_.state_dir;
-    sparkplug_ = std::make_unique<sparkplug::EdgeClient>(io_, std::move(sc), log_);
-    sparkplug::register_metrics(metrics_, sparkplug_);
-    // Its CANopen side: every stack event (on_stack_event) and the NCMD/DCMD
-    // writes, which go through the request core like any other front end's.
-    std::vector<SparkplugOutput::Network> spb_networks;
-    for (const auto& n : nets_) spb_networks.push_back({n->number, n->cfg.nodes});
-    SparkplugOutput::Sources sources;
-    sources.description = [this](std::uint32_t net, std::uint8_t node) { return description(net, node); };
-    sources.pdo_table = [this](std::uint32_t net) { return pdo_config(net); };
-    sources.bus_state = [this](std::uint32_t net) { return bus_state(net); };
-    sources.now_ms = [c = sparkplug_.get()] { return c->now_ms(); };
-    sparkplug_out_ = std::make_unique<SparkplugOutput>(
-        sparkplug_->edge(), [c = sparkplug_.get()](std::vector<sparkplug::Outgoing>& out) { c->send(out); },
-        [this](core::Request req, core::RequestCore::Done done) { core_.execute(std::move(req), std::move(done)); },
-        std::move(spb_networks), std::move(sources),
-        SparkplugOutput::Options{config_.sparkplug.aliases, config_.sparkplug.commands_role}, log_);
-    sparkplug_->on_command = [o = sparkplug_out_.get()](sparkplug::WriteCommand cmd) { o->on_command(cmd); };
   }
   history::register_metrics(metrics_, history_);  // issue 18: the PDO value history's bytes and objects
 }
@@ -285,6 +258,23 @@ const status::View& App::status() const { return *status_; }
 
 const mqtt::MqttPublisher* App::mqtt_publisher() const { return mqtt_ ? mqtt_->publisher() : nullptr; }
 
+void App::add_output(std::unique_ptr<StackOutput> output) {
+  if (!started_ && output) outputs_.push_back(std::move(output));
+}
+
+std::optional<status::SparkplugStatus> App::sparkplug_status() const {
+  return sparkplug_status_ ? sparkplug_status_() : std::nullopt;
+}
+
+std::vector<NodeConfig> App::configured_nodes(std::uint32_t net_number) const {
+  if (net_number == 0 || net_number > nets_.size()) return {};
+  return nets_[net_number - 1]->cfg.nodes;
+}
+
+void App::serve_mqtt_requests(std::unique_ptr<mqtt::MqttRequests> requests) {
+  if (mqtt_ && !started_) mqtt_->set_requests(std::move(requests));
+}
+
 void App::start() {
   if (started_ || stopped_) return;
   started_ = true;
@@ -305,10 +295,7 @@ void App::start() {
     mqtt_->start();
     pipeline_.add_consumer([out = mqtt_.get()](const EncodedEventPtr& ev) { out->on_event(ev); });
   }
-  if (sparkplug_) {
-    sparkplug_out_->start();  // the node metrics, born with the first NBIRTH
-    sparkplug_->start();
-  }
+  for (auto& o : outputs_) o->start();  // Sparkplug: the node metrics, then connecting
   for (auto& n : nets_) {
     // The state the channel was opened in: the channel reported it before
     // anyone listened, and the retained bus topic and the state cache (REST,
@@ -347,7 +334,7 @@ void App::stop() {
     n->network->report(down);
   }
   // Sparkplug: NDEATH, then DISCONNECT, while the networks still run.
-  if (sparkplug_) sparkplug_->stop();
+  for (auto& o : outputs_) o->stop();
   // No retained state may claim a node runs once the gateway is gone; the
   // offline status says when and after how long (mqtt_output.hpp).
   if (mqtt_) mqtt_->stop();
@@ -376,7 +363,7 @@ void App::stop() {
 // The own node's EMCYs for lost nodes were raised before (LocalNode, in the unit).
 void App::on_stack_event(Net& n, const canopen::Event& ev) {
   log_event(n, ev);
-  if (sparkplug_out_) sparkplug_out_->on_event(n.number, ev);  // typed values, not the encoded event
+  for (auto& o : outputs_) o->on_event(n.number, ev);  // typed values, not the encoded event
   // Durably reserved before the event leaves the process (one write per block).
   if (auto ec = n.seq ? n.seq->use(ev.seq) : std::error_code())
     log_.warn(n.label + ": cannot store the event sequence in " + n.seq->file().string() + ": " + ec.message() +

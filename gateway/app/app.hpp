@@ -69,10 +69,7 @@ struct PdoReadReport;
 
 namespace gateway::mqtt {
 class MqttPublisher;
-}
-
-namespace gateway::sparkplug {
-class EdgeClient;
+class MqttRequests;
 }
 
 namespace gateway::trace {
@@ -83,7 +80,7 @@ namespace gateway {
 
 class AppStatus;
 class MqttOutput;
-class SparkplugOutput;
+class StackOutput;
 struct Composition;
 struct NetworkUnit;
 
@@ -115,6 +112,22 @@ class App {
   // http.tokens (mqtt.requests-role without one) and rate-limited with
   // http.rate-limit's numbers; audit lines go to the log.
   core::RequestCore& requests() { return core_; }
+
+  // The MQTT request front end (front_ends.hpp: serve_mqtt_requests): the
+  // MQTT output's session subscribes to the request topics and hands their
+  // PUBLISHes to it, and sends its replies. Before start(); ignored with
+  // MQTT off. Without one, requests over MQTT are not served.
+  void serve_mqtt_requests(std::unique_ptr<mqtt::MqttRequests> requests);
+
+  // An output fed the stack's events typed, started after MQTT and stopped
+  // before it (pipeline/stack_output.hpp; the Sparkplug B edge node,
+  // front_ends.hpp: add_sparkplug). Before start(); the App owns it.
+  void add_output(std::unique_ptr<StackOutput> output);
+  // What the status view's sparkplug() answers (front_ends.hpp:
+  // add_sparkplug); what `read` refers to MUST live as long as the App.
+  void set_sparkplug_status(std::function<std::optional<status::SparkplugStatus>()> read) {
+    sparkplug_status_ = std::move(read);
+  }
 
   // Extra consumer of every outgoing event (e.g. the WebSocket hub).
   void add_consumer(EventPipeline::Consumer c) { pipeline_.add_consumer(std::move(c)); }
@@ -162,9 +175,9 @@ class App {
   // The MQTT publisher (e.g. tests: its counters); nullptr when MQTT is off
   // or before start().
   const mqtt::MqttPublisher* mqtt_publisher() const;
-  // The Sparkplug B edge node (REST, /metrics, tests); nullptr unless
-  // config.sparkplug.enabled.
-  const sparkplug::EdgeClient* sparkplug() const { return sparkplug_.get(); }
+  // The Sparkplug B edge node's session (GET /api/v1/gateway) as the
+  // function set_sparkplug_status() was given reads it; nullopt without one.
+  std::optional<status::SparkplugStatus> sparkplug_status() const;
   // The PDO configuration the gateway uses for the described nodes of
   // network `net` (canopen::Network::pdo_config(): EDS/DCF, then what its
   // SDO writes changed and what was read from the devices); nullptr for an
@@ -191,6 +204,8 @@ class App {
   using NodeOrigin = gateway::status::NodeOrigin;
   // The configured nodes of network `net` in node-ID order; empty for an unknown network.
   std::vector<NodeOrigin> node_origins(std::uint32_t net) const;
+  // Their settings as they apply now, in configuration order (status/view.hpp).
+  std::vector<NodeConfig> configured_nodes(std::uint32_t net) const;
 
   // The request counters and SDO latency histogram (GET /api/v1/gateway).
   using Counters = core::Counters;
@@ -243,11 +258,10 @@ class App {
   std::vector<std::unique_ptr<Net>> nets_;
   std::chrono::steady_clock::time_point started_at_ = std::chrono::steady_clock::now();
   std::unique_ptr<MqttOutput> mqtt_;  // with MQTT on (config.mqtt.enabled)
-  // The Sparkplug B edge node (config.sparkplug.enabled): built in the
-  // constructor, started after MQTT, stopped before the networks close.
-  std::unique_ptr<sparkplug::EdgeClient> sparkplug_;
-  // Its CANopen side; after sparkplug_: it holds the client's EdgeSession.
-  std::unique_ptr<SparkplugOutput> sparkplug_out_;
+  // Outputs of their own (the Sparkplug B edge node): started after MQTT,
+  // stopped before it, while the networks still run.
+  std::vector<std::unique_ptr<StackOutput>> outputs_;
+  std::function<std::optional<status::SparkplugStatus>()> sparkplug_status_;
   std::unique_ptr<AppStatus> status_;  // over this App's accessors
   bool started_ = false;
   bool stopped_ = false;

@@ -19,6 +19,7 @@ class AppStatus final : public status::View {
   const std::string& gateway_id() const override;
   std::chrono::steady_clock::time_point started_at() const override;
   const std::vector<NetworkConfig>& networks() const override;
+  const std::string& config_file() const override;
   std::size_t max_program_bytes() const override;
   const StateCache& cache() const override;
   const canopen::eds::DeviceDescription* description(std::uint32_t net, std::uint8_t node) const override;
@@ -26,6 +27,7 @@ class AppStatus final : public status::View {
   std::optional<canopen::NmtState> own_state(std::uint32_t net) const override;
   std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const override;
   std::vector<status::NodeOrigin> node_origins(std::uint32_t net) const override;
+  std::vector<NodeConfig> configured_nodes(std::uint32_t net) const override;
   const canopen::pdo::RemotePdoTable* pdo_config(std::uint32_t net) const override;
   std::shared_ptr<trace::NetworkTrace> frame_tap(std::uint32_t net) const override;
   const history::ValueHistory* value_history() const override;

@@ -5,6 +5,8 @@
 #include "ascii/ascii_lss.hpp"
 #include "http/http_metrics.hpp"
 #include "metrics/metrics.hpp"
+#include "mqtt_requests/mqtt_requests.hpp"
+#include "sparkplug/edge_node.hpp"
 #include "rest/rest_api.hpp"
 
 namespace gateway {
@@ -23,6 +25,33 @@ void install_http_api(http::HttpServer& server, App& app) {
 void connect_event_stream(http::HttpServer& server, App& app) {
   app.add_consumer([srv = &server](const EncodedEventPtr& ev) { srv->publish(ev); });
   app.set_protobuf_demand([srv = &server] { return srv->binary_clients() > 0; });
+}
+
+void serve_mqtt_requests(App& app, Logger& log) {
+  const auto& config = app.config();
+  if (!config.mqtt.enabled) return;
+  app.serve_mqtt_requests(std::make_unique<mqtt::MqttRequests>(
+      config.gateway_id, config.mqtt.reply_topics, log,
+      [&core = app.requests()](core::Request req, core::RequestCore::Done done) {
+        core.execute(std::move(req), std::move(done));
+      }));
+}
+
+sparkplug::EdgeNode* add_sparkplug(boost::asio::io_context& io, App& app, Logger& log) {
+  const auto& config = app.config();
+  if (!config.sparkplug.enabled) return nullptr;
+  sparkplug::EdgeClientConfig client;
+  client.session = {config.sparkplug.group_id, config.sparkplug.edge_node_id, config.sparkplug.primary_host_id};
+  client.mqtt = config.sparkplug.mqtt;
+  client.state_dir = config.state_dir;
+  auto node = std::make_unique<sparkplug::EdgeNode>(
+      io, std::move(client), SparkplugOutput::Options{config.sparkplug.aliases, config.sparkplug.commands_role},
+      app.requests(), app.status(), log);
+  auto* edge = node.get();
+  sparkplug::register_metrics(app.metrics(), edge->client_slot());
+  app.set_sparkplug_status([edge] { return std::optional<status::SparkplugStatus>(edge->status()); });
+  app.add_output(std::move(node));
+  return edge;
 }
 
 std::unique_ptr<ascii::Server> make_ascii_server(boost::asio::io_context& io, App& app, Logger& log) {

@@ -6,20 +6,23 @@
 namespace gateway {
 
 MqttOutput::MqttOutput(boost::asio::io_context& io, MqttConfig config, std::string gateway_id, Logger& log,
-                       Status status, const std::vector<Node>& configured, Execute execute)
+                       Status status, const std::vector<Node>& configured)
     : io_(io),
       config_(std::move(config)),
       gateway_id_(std::move(gateway_id)),
       log_(log),
-      status_(std::move(status)),
-      execute_(std::move(execute)) {
+      status_(std::move(status)) {
   const EncodeContext ctx{gateway_id_};
   for (const auto& n : configured) state_topics_.insert(node_topic(ctx, n.network, n.node, "state"));
 }
 
 MqttOutput::~MqttOutput() = default;
 
-void MqttOutput::register_metrics(metrics::Registry& r) const { mqtt::register_metrics(r, publisher_, requests_); }
+void MqttOutput::register_metrics(metrics::Registry& r) const {
+  mqtt::register_metrics(r, publisher_, [this] { return requests_ ? requests_->counters().replies_refused : 0; });
+}
+
+void MqttOutput::set_requests(std::unique_ptr<mqtt::MqttRequests> requests) { requests_ = std::move(requests); }
 
 void MqttOutput::start() {
   // The publisher's settings as parsed; the rest is known only now.
@@ -30,11 +33,12 @@ void MqttOutput::start() {
   // knows when it went offline).
   mc.online_payload = status_payload(true);
   mc.offline_payload = status_payload(false);
-  requests_ = std::make_unique<mqtt::MqttRequests>(gateway_id_, config_.reply_topics, log_, execute_);
   auto* requests = requests_.get();
-  publisher_ = std::make_unique<mqtt::MqttPublisher>(
-      io_, mc, log_, [requests](const mqtt::codec::Publish& msg) { requests->on_publish(msg); });
-  requests->set_reply_sender(publisher_->reply_sender());
+  mc.accept_requests = mc.accept_requests && requests != nullptr;
+  mqtt::MqttPublisher::RequestSink sink;
+  if (requests != nullptr) sink = [requests](const mqtt::codec::Publish& msg) { requests->on_publish(msg); };
+  publisher_ = std::make_unique<mqtt::MqttPublisher>(io_, mc, log_, std::move(sink));
+  if (requests != nullptr) requests->set_reply_sender(publisher_->reply_sender());
   publisher_->start();
   // Where to look, for a person: the broker and the topics to subscribe to.
   log_.info("MQTT: broker " + config_.server_uri + ", topic prefix canopen/" + gateway_id_ +

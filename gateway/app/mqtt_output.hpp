@@ -1,13 +1,14 @@
-// The gateway's MQTT output: the publisher (mqtt/publisher.hpp) and the
-// request handler it feeds (mqtt/mqtt_requests.hpp), which events of the
+// The gateway's MQTT output: the publisher (mqtt/publisher.hpp) and, when
+// the composition root handed one over (set_requests()), the request front
+// end its session carries (mqtt_requests/mqtt_requests.hpp), which events of the
 // stream go to it (heartbeats: mqtt.heartbeat, and at most one per node per
 // mqtt.heartbeat-min-interval), the gateway status payloads (the online
 // status and the Will at start, the offline status of a clean stop), and
 // at a clean stop the retained node state topics deleted, so no retained
 // message claims a node runs once the gateway is gone.
 //
-// Thread safety: io_context thread only. The io_context, the logger and
-// what `execute` refers to MUST outlive the output.
+// Thread safety: io_context thread only. The io_context and the logger
+// MUST outlive the output.
 #pragma once
 
 #include <chrono>
@@ -23,10 +24,9 @@
 #include <boost/asio/io_context.hpp>
 
 #include "config/config.hpp"
-#include "core/request_core.hpp"
 #include "event_message.hpp"
 #include "log.hpp"
-#include "mqtt/mqtt_requests.hpp"
+#include "mqtt_requests/mqtt_requests.hpp"
 #include "mqtt/publisher.hpp"
 #include "metrics/registry.hpp"
 
@@ -47,12 +47,9 @@ class MqttOutput {
     std::uint32_t network = 0;
     std::uint8_t node = 0;
   };
-  // Hands a decoded MQTT request to the request core.
-  using Execute = std::function<void(core::Request, core::RequestCore::Done)>;
-
   // Builds nothing that touches the broker or the queue yet (start()).
   MqttOutput(boost::asio::io_context& io, MqttConfig config, std::string gateway_id, Logger& log, Status status,
-             const std::vector<Node>& configured, Execute execute);
+             const std::vector<Node>& configured);
   ~MqttOutput();
   MqttOutput(const MqttOutput&) = delete;
   MqttOutput& operator=(const MqttOutput&) = delete;
@@ -62,9 +59,13 @@ class MqttOutput {
   // outlive the registry's render() calls.
   void register_metrics(metrics::Registry& r) const;
 
-  // Builds the request handler and the publisher (opening its queue: throws
-  // what MqttPublisher's constructor throws) with the online status and the
-  // Will as of now, and starts connecting.
+  // The request front end the publisher hands the request topics' PUBLISHes
+  // to and whose replies it sends. Before start(); without one the
+  // publisher does not subscribe to the request topics.
+  void set_requests(std::unique_ptr<mqtt::MqttRequests> requests);
+  // Builds the publisher (opening its queue: throws what MqttPublisher's
+  // constructor throws) with the online status and the Will as of now, and
+  // starts connecting.
   void start();
   // A pipeline event: state topics are remembered for the stop; heartbeats
   // pass the switch and the rate limit; then it is published (after
@@ -94,7 +95,6 @@ class MqttOutput {
   std::string gateway_id_;
   Logger& log_;
   Status status_;
-  Execute execute_;
   std::set<std::string> state_topics_;
   // When each node's last heartbeat went out, by (network, node).
   std::map<std::pair<std::uint32_t, std::uint8_t>, std::chrono::steady_clock::time_point> last_heartbeat_;

@@ -6,7 +6,7 @@
 #include "app/network_unit.hpp"
 #include "app/node_configs.hpp"
 #include "app/node_overlay.hpp"
-#include "app/sparkplug_output.hpp"
+#include "pipeline/stack_output.hpp"
 #include "state_file.hpp"
 
 namespace gateway {
@@ -39,7 +39,7 @@ core::NodeConfigView App::NodeConfigs::node_config(std::uint32_t net, std::uint8
     v.source = "none";
     return v;
   }
-  v.settings = node_config_json(*n);
+  v.settings = *n;
   if (auto it = unit.overlay_files.find(node); it != unit.overlay_files.end()) {
     v.source = "state-dir";
     v.file = it->second;
@@ -49,32 +49,17 @@ core::NodeConfigView App::NodeConfigs::node_config(std::uint32_t net, std::uint8
   return v;
 }
 
-core::Result App::NodeConfigs::write_node_config(std::uint32_t net, std::uint8_t node,
-                                                 const boost::json::value& settings) {
+core::Result App::NodeConfigs::write_node_config(std::uint32_t net, std::uint8_t, const NodeConfig& settings) {
   NetworkUnit& unit = *app.nets_[net - 1];
-  boost::json::value body = settings;
-  // The node is the path's: "id" may be left out.
-  if (auto* o = body.if_object(); o != nullptr && !o->contains("id")) (*o)["id"] = node;
-  NodeConfig n;
-  try {
-    // Relative file names as in the configuration file: against its directory.
-    const std::string dir = app.config_.source.empty() ? std::string() : fs::path(app.config_.source).parent_path().string();
-    n = node_config_from_json(body, unit.cfg, "request body", dir, false);
-  } catch (const ConfigError& e) {
-    return problem(400, e.what());
-  }
-  if (n.id != node)
-    return problem(400, "request body: id: " + std::to_string(n.id) + " is not the node of the path (" +
-                            std::to_string(node) + ")");
   std::optional<canopen::eds::DeviceDescription> desc;
-  if (!n.eds.empty()) {
+  if (!settings.eds.empty()) {
     try {
-      desc = unit.load_description(n);
+      desc = unit.load_description(settings);
     } catch (const canopen::eds::EdsError& e) {
       return problem(400, e.what());
     }
   }
-  return change(net, std::move(n), std::move(desc));
+  return change(net, settings, std::move(desc));
 }
 
 core::Result App::NodeConfigs::write_node_eds(std::uint32_t net, std::uint8_t node,
@@ -122,7 +107,7 @@ void App::NodeConfigs::apply(std::uint32_t net, const NodeConfig& node,
   unit.apply_node(node, std::move(description));
   app.history_.forget_node(net, node.id);  // another device or mapping: its old values are not this one's
   app.cache_.add_configured_node(net, node.id, node.name);
-  if (app.sparkplug_out_) app.sparkplug_out_->node_changed(net, node.id, node.sparkplug_metrics);
+  for (auto& o : app.outputs_) o->node_changed(net, node);  // Sparkplug: a new DBIRTH
   app.log_.info(unit.label + " node " + std::to_string(node.id) + ": settings applied at run time (" +
                 (described ? "EDS/DCF " + node.eds : std::string("no EDS/DCF")) + ")");
 }
@@ -152,7 +137,9 @@ core::Result App::NodeConfigs::revert_node_config(std::uint32_t net, std::uint8_
     unit.remove_node(node);
     app.history_.forget_node(net, node);
     app.cache_.unconfigure_node(net, node);
-    if (app.sparkplug_out_) app.sparkplug_out_->node_changed(net, node, {});
+    NodeConfig gone;  // no longer configured: its id only, nothing listed
+    gone.id = node;
+    for (auto& o : app.outputs_) o->node_changed(net, gone);
     app.log_.info(unit.label + " node " + std::to_string(node) + ": run-time settings dropped; not configured");
   }
   return node_config(net, node);

@@ -18,7 +18,7 @@ namespace gateway {
 struct App::NodeConfigs final : core::NodeSettings {
   explicit NodeConfigs(App& a) : app(a) {}
   core::NodeConfigView node_config(std::uint32_t net, std::uint8_t node) const override;
-  core::Result write_node_config(std::uint32_t net, std::uint8_t node, const boost::json::value& settings) override;
+  core::Result write_node_config(std::uint32_t net, std::uint8_t node, const NodeConfig& settings) override;
   core::Result write_node_eds(std::uint32_t net, std::uint8_t node, canopen::eds::DeviceDescription description,
                               std::string_view text) override;
   core::Result revert_node_config(std::uint32_t net, std::uint8_t node) override;

@@ -5,7 +5,6 @@
 #include <sstream>
 
 #include <boost/json/parse.hpp>
-#include <boost/json/serialize.hpp>
 
 namespace gateway {
 
@@ -28,21 +27,6 @@ fs::path node_settings_file(const std::string& state_dir, std::uint32_t net, std
 
 fs::path node_eds_file(const std::string& state_dir, std::uint32_t net, std::uint8_t node, bool dcf) {
   return fs::path(state_dir) / "nodes" / (stem(net, node) + (dcf ? ".dcf" : ".eds"));
-}
-
-NodeConfig node_config_from_json(const boost::json::value& settings, const NetworkConfig& net,
-                                 const std::string& source, const std::string& dir, bool lines) {
-  boost::json::value v = settings;
-  bool built_in = false;
-  if (auto* o = v.if_object(); o != nullptr && net.simulated) {
-    if (const auto* e = o->if_contains("eds"); e != nullptr && e->is_string() && e->as_string() == kBuiltInEds) {
-      built_in = true;
-      o->erase("eds");
-    }
-  }
-  NodeConfig n = parse_node_config(boost::json::serialize(v), source, dir, lines);
-  if (built_in) n.eds = std::string(kBuiltInEds);
-  return n;
 }
 
 std::map<std::uint8_t, std::string> apply_node_overlay(const std::string& state_dir, std::uint32_t net,

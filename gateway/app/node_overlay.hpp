@@ -15,26 +15,14 @@
 #include <map>
 #include <string>
 
-#include <boost/json/value.hpp>
-
 #include "config/config.hpp"
 #include "log.hpp"
 
 namespace gateway {
 
-// The built-in EDS of a demo node, as its settings name it.
-inline constexpr std::string_view kBuiltInEds = "(built in)";
-
 std::filesystem::path node_settings_file(const std::string& state_dir, std::uint32_t net, std::uint8_t node);
 // The kept EDS/DCF of a node (the ending says which, as for any EDS file).
 std::filesystem::path node_eds_file(const std::string& state_dir, std::uint32_t net, std::uint8_t node, bool dcf);
-
-// One `nodes:` entry from JSON (a PUT body or an overlay file), checked by
-// parse_node_config(); on a simulated network `"eds": "(built in)"` names
-// the demo's own description. `source`/`lines` as parse_node_config().
-// Throws ConfigError.
-NodeConfig node_config_from_json(const boost::json::value& settings, const NetworkConfig& net,
-                                 const std::string& source, const std::string& dir, bool lines);
 
 // Start-up: the overlay files of network `net` over cfg.nodes (a node in
 // the overlay takes its settings as a whole; one only there is added).

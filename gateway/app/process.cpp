@@ -130,6 +130,14 @@ int run_gateway(const CliOptions& opts) {
     // The composition root: one unit per network, its channel opened.
     auto networks = compose_networks(io, config, log);
     app = std::make_unique<App>(io, config, log, std::move(networks));
+    // MQTT requests on the App's MQTT session, the Sparkplug B edge node on
+    // its own: front ends on the same request core (its /metrics families
+    // before the HTTP server's, as always).
+    serve_mqtt_requests(*app, log);
+    add_sparkplug(io, *app, log);
+  } catch (const std::invalid_argument& e) {
+    print_error(std::string("sparkplug: ") + e.what());
+    return kExitConfig;
   } catch (const ConfigError& e) {
     print_error(e.what());
     return kExitConfig;

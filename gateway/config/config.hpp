@@ -8,6 +8,7 @@
 #pragma once
 
 #include <boost/json/object.hpp>
+#include <boost/json/value.hpp>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -20,6 +21,7 @@
 
 #include "canopen/lss/frames.hpp"
 #include "cli.hpp"
+#include "core/node_entry.hpp"
 #include "http/http_config.hpp"
 #include "mqtt/mqtt_config.hpp"
 #include "event_message.hpp"
@@ -32,46 +34,6 @@ namespace gateway {
 class ConfigError : public std::runtime_error {
  public:
   explicit ConfigError(const std::string& what) : std::runtime_error(printable(what)) {}
-};
-
-struct GuardingConfig {
-  std::chrono::milliseconds guard_time{0};  // 100Ch of the node; 0 = no guarding
-  std::uint8_t life_time_factor = 0;        // 100Dh
-};
-
-// Boot-up handling of one node in the spirit of CiA 302 (master/boot_configurator.hpp).
-struct BootConfig {
-  bool check_identity = true;  // compare 1000h/1018h with the EDS/DCF
-  bool configure = false;      // write the DCF's PDO, heartbeat and ParameterValue entries
-  bool start = false;          // NMT start once configured
-  // Read the node's PDO configuration (1400h-1BFFh) from the device after
-  // the identity check and DCF download, before the NMT start, so its real
-  // mapping wins over the EDS (Network::configure_boot). nullopt: the
-  // network's setting.
-  std::optional<bool> read_pdo_config;
-};
-
-// An object listed in a node's `sparkplug-metrics` ("2300h", "6060h:0"):
-// read by SDO for the node's Sparkplug DBIRTH. No sub-index: every
-// sub-object of a record/array in the EDS (sub 0 for a variable).
-struct SparkplugObject {
-  std::uint16_t index = 0;
-  std::optional<std::uint8_t> sub;
-  friend bool operator==(const SparkplugObject&, const SparkplugObject&) = default;
-};
-
-struct NodeConfig {
-  std::uint8_t id = 0;
-  std::string name;     // optional; shown in the API and dashboard
-  std::string eds;      // EDS or DCF file ("" = none: values arrive raw)
-  // heartbeat-consumer-ms. nullopt ("auto", the default): watched anyway,
-  // lost after 3 x P without a heartbeat, P the node's 1017h from its
-  // EDS/DCF or else learnt from its heartbeats. 0: not watched. Otherwise
-  // the gateway's 1016h consumer time for the node.
-  std::optional<std::chrono::milliseconds> heartbeat_consumer;
-  GuardingConfig guarding;
-  std::optional<BootConfig> boot;  // nullopt: only watch the node
-  std::vector<SparkplugObject> sparkplug_metrics;  // contract "Sparkplug B"
 };
 
 struct SyncConfig {
@@ -250,6 +212,21 @@ Config parse_config(const std::string& yaml_text, const std::string& file);
 // line; relative eds/dcf names resolve against `dir`. Throws ConfigError.
 NodeConfig parse_node_config(std::string_view text, const std::string& source, const std::string& dir,
                              bool lines = true);
+// The built-in EDS of a demo node, as its settings name it.
+inline constexpr std::string_view kBuiltInEds = "(built in)";
+// One `nodes:` entry from JSON (a PUT .../config body or a state-dir
+// overlay file), checked by parse_node_config(); on a simulated network
+// (`net`) `"eds": "(built in)"` names the demo's own description.
+// `source`/`lines`/`dir` as parse_node_config(). Throws ConfigError.
+NodeConfig node_config_from_json(const boost::json::value& settings, const NetworkConfig& net,
+                                 const std::string& source, const std::string& dir, bool lines);
+// A PUT .../nodes/{node}/config body (a JSON object of one `nodes:` entry;
+// "id" may be left out: the path's node) as node_config_from_json() reads
+// it for network `net`, relative file names against the directory of
+// `config_file` (the configuration file; "" = none). Throws ConfigError
+// ("request body: ...").
+NodeConfig node_config_from_request(boost::json::value body, std::uint8_t node, const NetworkConfig& net,
+                                    const std::string& config_file);
 // `n` as the keys of its `nodes:` entry (parse_node_config() reads it back
 // to the same NodeConfig): id, name, eds, heartbeat-consumer-ms ("auto" or
 // ms), guarding, boot, sparkplug-metrics; absent keys are the defaults.

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <set>
 
+#include <boost/json/serialize.hpp>
 #include <yaml-cpp/yaml.h>
 
 #include "config/config_yaml.hpp"
@@ -200,6 +201,28 @@ NodeConfig parse_node_config(std::string_view text, const std::string& source, c
   NodeConfig n;
   parse_node(a, n, dir);
   return n;
+}
+
+NodeConfig node_config_from_json(const boost::json::value& settings, const NetworkConfig& net,
+                                 const std::string& source, const std::string& dir, bool lines) {
+  boost::json::value v = settings;
+  bool built_in = false;
+  if (auto* o = v.if_object(); o != nullptr && net.simulated) {
+    if (const auto* e = o->if_contains("eds"); e != nullptr && e->is_string() && e->as_string() == kBuiltInEds) {
+      built_in = true;
+      o->erase("eds");
+    }
+  }
+  NodeConfig n = parse_node_config(boost::json::serialize(v), source, dir, lines);
+  if (built_in) n.eds = std::string(kBuiltInEds);
+  return n;
+}
+
+NodeConfig node_config_from_request(boost::json::value body, std::uint8_t node, const NetworkConfig& net,
+                                    const std::string& config_file) {
+  if (auto* o = body.if_object(); o != nullptr && !o->contains("id")) (*o)["id"] = node;
+  const std::string dir = config_file.empty() ? std::string() : fs::path(config_file).parent_path().string();
+  return node_config_from_json(body, net, "request body", dir, false);
 }
 
 boost::json::object node_config_json(const NodeConfig& n) {

@@ -1,7 +1,8 @@
 // Run-time node configuration in the request core (contract "Remote
 // configuration and maintenance"): GET/PUT/DELETE .../config and PUT
 // .../eds. The role, network and node-ID are checked by execute(); here the
-// gateway's own node is refused, an EDS/DCF is read exactly as
+// gateway's own node is refused, settings the front end could not decode
+// and settings for another node are refused, an EDS/DCF is read exactly as
 // `canopen-eds check` reads it, and every change gets an audit line.
 #include <string>
 
@@ -9,7 +10,6 @@
 #include "core/core_helpers.hpp"
 #include "core/node_settings.hpp"
 #include "core/request_core.hpp"
-#include "edstool/eds_report.hpp"
 
 namespace gateway::core {
 
@@ -41,7 +41,14 @@ void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Com
       result = node_settings_->revert_node_config(net, node);
     } else {
       what = "configuration changed";
-      result = node_settings_->write_node_config(net, node, w->settings);
+      if (!w->invalid.empty()) {
+        result = detail::problem(400, w->invalid);
+      } else if (w->settings.id != node) {
+        result = detail::problem(400, "request body: id: " + std::to_string(w->settings.id) +
+                                          " is not the node of the path (" + std::to_string(node) + ")");
+      } else {
+        result = node_settings_->write_node_config(net, node, w->settings);
+      }
     }
   } else {
     const auto& e = std::get<NodeEdsWrite>(command);
@@ -54,10 +61,12 @@ void RequestCore::node_config(const Caller& caller, std::uint32_t net, const Com
       // node's ID resolves $NODEID and wins over a DCF's NodeID.
       try {
         auto desc = canopen::eds::parse_device_description(e.text, name, node);
-        std::vector<std::string> warnings;
-        for (const auto& line : desc.warnings) warnings.push_back(edstool::warning_line(name, line));
+        auto warnings = desc.warnings;
         result = node_settings_->write_node_eds(net, node, std::move(desc), e.text);
-        if (auto* view = std::get_if<NodeConfigView>(&result)) view->warnings = std::move(warnings);
+        if (auto* view = std::get_if<NodeConfigView>(&result)) {
+          view->warnings = std::move(warnings);
+          view->eds_name = name;
+        }
       } catch (const canopen::eds::EdsError& err) {
         result = detail::problem(400, err.what());
       }

@@ -8,7 +8,6 @@
 // Thread safety: the io thread only, as RequestCore.
 #pragma once
 
-#include <boost/json/value.hpp>
 #include <cstdint>
 #include <string_view>
 
@@ -20,13 +19,13 @@ namespace gateway::core {
 class NodeSettings {
  public:
   virtual ~NodeSettings() = default;
-  // The node's settings (its `nodes:` entry as JSON) and where they come from.
+  // The node's settings (its `nodes:` entry) and where they come from.
   virtual NodeConfigView node_config(std::uint32_t net, std::uint8_t node) const = 0;
-  // Checks `settings` by the rules of the configuration file (a Problem 400
-  // with the file parser's reason), applies them at once and keeps them in
-  // state-dir (409 when there is none). Answers NodeConfigView or Problem;
-  // a Problem changes nothing.
-  virtual Result write_node_config(std::uint32_t net, std::uint8_t node, const boost::json::value& settings) = 0;
+  // Applies `settings` (decoded by the configuration file's rules, for this
+  // node) at once and keeps them in state-dir (409 when there is none; 400
+  // when its EDS/DCF cannot be read). Answers NodeConfigView or Problem; a
+  // Problem changes nothing.
+  virtual Result write_node_config(std::uint32_t net, std::uint8_t node, const NodeConfig& settings) = 0;
   // Uses `description` (already accepted by the EDS reader) for the node at
   // once, keeps `text` in state-dir and makes it the node's eds. As above.
   virtual Result write_node_eds(std::uint32_t net, std::uint8_t node, canopen::eds::DeviceDescription description,

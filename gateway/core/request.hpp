@@ -11,7 +11,6 @@
 // Plain value types; thread safety as for any value.
 #pragma once
 
-#include <boost/json/value.hpp>
 #include <chrono>
 #include <cstdint>
 #include <optional>
@@ -23,6 +22,7 @@
 
 #include "canopen/events.hpp"
 #include "canopen/literal.hpp"
+#include "core/node_entry.hpp"
 #include "canopen/lss/frames.hpp"
 #include "canopen/pdo/config_reader.hpp"
 #include "canopen/types.hpp"
@@ -218,15 +218,20 @@ struct LssInquire {
 struct NodeConfigRead {
   std::uint8_t node = 0;
 };
-// New settings for the node: the keys of one YAML `nodes:` entry, as JSON
-// (JSON is YAML); validated exactly as the YAML file is, applied at once
-// and kept in state-dir. Nothing changes on error (400 with the reason).
+// New settings for the node (one `nodes:` entry, typed: core/node_entry.hpp),
+// applied at once and kept in state-dir. The front end decodes them by the
+// configuration file's rules (config/: parse_node_config); what it could
+// not decode travels in `invalid` (the parser's reason) and is answered 400
+// after the caller, the network and the node-ID were checked, as a decoded
+// request's would be. `settings.id` MUST be the node (else 400). Nothing
+// changes on error.
 struct NodeConfigWrite {
   std::uint8_t node = 0;
-  boost::json::value settings;
+  NodeConfig settings;
   // DELETE .../config: drop the state-dir settings (and a kept EDS), back to
   // the YAML's; `settings` is then unused.
   bool revert = false;
+  std::string invalid;  // non-empty: the settings did not decode; why
 };
 // An EDS or DCF file for the node: checked like `canopen-eds check` (400
 // with "FILE:LINE: reason"), then used at once and kept in state-dir.
@@ -345,18 +350,19 @@ struct LssInquired {
 };
 
 // Remote configuration results.
-// The node's settings as the YAML keys (JSON) and where they come from:
-// "state-dir" (changed at run time), "config" (the YAML file or flags),
-// "none" (not configured).
+// The node's settings and where they come from: "state-dir" (changed at
+// run time), "config" (the YAML file or flags), "none" (not configured).
 struct NodeConfigView {
   std::uint32_t network = 0;
   std::uint8_t node = 0;
-  boost::json::value settings;  // null when the node is not configured
+  std::optional<NodeConfig> settings;  // nullopt when the node is not configured
   std::string source;
   std::string file;  // source "state-dir": the file that holds the settings
-  // NodeEdsWrite: the reader's warnings as `canopen-eds check` prints them
-  // ("FILE:LINE: warning: reason"); the file was accepted.
+  // NodeEdsWrite: the EDS reader's warnings as it wrote them ("file:line:
+  // text", DeviceDescription::warnings) for the uploaded file `eds_name`;
+  // the file was accepted.
   std::vector<std::string> warnings;
+  std::string eds_name;
 };
 // One object of a DCF read-back or apply that did not go through.
 struct ObjectOutcome {

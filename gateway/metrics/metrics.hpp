@@ -2,7 +2,7 @@
 // dependency-free writer and the gateway's metric families. Each family's
 // name, help and labels are defined once, in the register_* function of the
 // component that owns it (below), on a Registry (registry.hpp): the live
-// components register once (pipeline_metrics.hpp, core/core_metrics.hpp,
+// components register once (pipeline_metrics.hpp, app/core_metrics.hpp,
 // mqtt/mqtt_metrics.hpp, http_metrics.hpp; the App holds the process's
 // registry) and /metrics serves Registry::render() with kContentType.
 //

@@ -2,7 +2,7 @@
 
 namespace gateway::mqtt {
 
-metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, const MqttRequests* requests) {
+metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, std::uint64_t requests_refused) {
   const auto c = publisher.counters();
   const auto& q = publisher.queue_counters();
   const auto& t = publisher.tier_counters();
@@ -14,7 +14,7 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, const MqttReques
   m.queue_depth = c.queue_depth;
   m.queue_bytes = c.queue_bytes;
   m.reconnects = c.reconnects;
-  m.requests_refused = requests != nullptr ? requests->counters().replies_refused : 0;
+  m.requests_refused = requests_refused;
   m.stalls = c.stalls;
   m.storage_failing = c.storage_failing;
   m.memory_depth = t.memory_depth;
@@ -33,9 +33,9 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, const MqttReques
 }
 
 void register_metrics(metrics::Registry& r, const std::unique_ptr<MqttPublisher>& publisher,
-                      const std::unique_ptr<MqttRequests>& requests) {
-  metrics::register_mqtt(r, [&publisher, &requests] {
-    return publisher ? to_metrics(*publisher, requests.get()) : metrics::MqttMetrics{};
+                      std::function<std::uint64_t()> requests_refused) {
+  metrics::register_mqtt(r, [&publisher, refused = std::move(requests_refused)] {
+    return publisher ? to_metrics(*publisher, refused ? refused() : 0) : metrics::MqttMetrics{};
   });
 }
 

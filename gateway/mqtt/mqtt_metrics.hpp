@@ -3,24 +3,27 @@
 // Thread safety: as the registry's (one io_context thread).
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <memory>
 
 #include "metrics/metrics.hpp"
-#include "mqtt/mqtt_requests.hpp"
 #include "mqtt/publisher.hpp"
 #include "metrics/registry.hpp"
 
 namespace gateway::mqtt {
 
 // The /metrics view of the publisher, its disk queue and its memory tier,
-// and of the requests it hands on (`requests`: nullptr when not served).
-metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, const MqttRequests* requests = nullptr);
+// and how many requests it handed on were dropped for their reply address
+// (MqttRequests::Counters::replies_refused; 0 when requests are not served).
+metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, std::uint64_t requests_refused = 0);
 
-// The publisher and the requests' handler as their owner holds them, read
-// at every render(): the owner may build them later (at start); while
-// `publisher` is empty every series reads 0, and an empty `requests` counts
-// no refused requests. Both slots MUST outlive the registry's render() calls.
+// The publisher as its owner holds it, read at every render(): the owner
+// may build it later (at start); while `publisher` is empty every series
+// reads 0. `requests_refused` (may be empty: 0) reads the request front
+// end's count at render time. The slot and what the function reads MUST
+// outlive the registry's render() calls.
 void register_metrics(metrics::Registry& r, const std::unique_ptr<MqttPublisher>& publisher,
-                      const std::unique_ptr<MqttRequests>& requests);
+                      std::function<std::uint64_t()> requests_refused);
 
 }  // namespace gateway::mqtt

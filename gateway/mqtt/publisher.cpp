@@ -20,7 +20,6 @@ namespace gateway::mqtt {
 namespace {
 
 namespace asio = boost::asio;
-namespace json = boost::json;
 
 }  // namespace
 
@@ -77,7 +76,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   asio::io_context& io;
   MqttConfig cfg;
   Logger& log;
-  RequestSink on_request;  // mqtt_requests.hpp
+  RequestSink on_request;  // the request front end (mqtt_requests/)
   OutboundQueue queue;
   bool queue_warned;
   asio::steady_timer sync_timer;

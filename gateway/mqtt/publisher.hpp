@@ -107,7 +107,7 @@
 #include "log.hpp"
 #include "mqtt/mqtt_codec.hpp"
 #include "mqtt/mqtt_config.hpp"
-#include "mqtt/mqtt_requests.hpp"
+#include "mqtt/reply_sender.hpp"
 #include "mqtt/outbound_queue.hpp"
 
 namespace gateway::mqtt {

@@ -8,6 +8,8 @@
 #include <boost/json/object.hpp>
 #include <boost/json/parse.hpp>
 
+#include "config/config.hpp"
+#include "edstool/eds_report.hpp"
 #include "rest/route_checks.hpp"
 
 namespace gateway::rest {
@@ -25,7 +27,8 @@ json::object node_config_json(const core::NodeConfigView& v) {
   out["node"] = v.node;
   out["source"] = v.source;
   if (!v.file.empty()) out["file"] = v.file;
-  out["settings"] = v.settings;
+  if (v.settings) out["settings"] = node_config_json(*v.settings);
+  else out["settings"] = nullptr;
   return out;
 }
 
@@ -44,6 +47,24 @@ void config_request(const Context& ctx, const Request& req, Responder respond, c
   auto r = core_request(req, *net, std::move(command));
   r.check_bus = false;  // settings, not the bus
   ctx.core.execute(std::move(r), json_result<core::NodeConfigView>(std::move(respond), node_config_json));
+}
+
+// The body by the configuration file's rules; what does not decode
+// travels in `invalid` (the core answers it after the caller and the node).
+core::NodeConfigWrite decode_node_settings(const status::View& status, const Request& req, std::uint8_t node,
+                                           const json::value& body) {
+  core::NodeConfigWrite w;
+  w.node = node;
+  std::string error;
+  const auto net = path_network(req, error);
+  // An unknown network is the core's 404, before it looks at the settings.
+  if (!net || *net == 0 || *net > status.networks().size()) return w;
+  try {
+    w.settings = node_config_from_request(body, node, status.networks()[*net - 1], status.config_file());
+  } catch (const ConfigError& e) {
+    w.invalid = e.what();
+  }
+  return w;
 }
 
 // The uploaded file's name: ?name=, else Content-Disposition's filename
@@ -80,13 +101,16 @@ void put_node_config(const Context& ctx, const Request& req, Responder respond) 
                                                       "of the configuration file (name, eds, heartbeat-consumer-ms, "
                                                       "guarding, boot, sparkplug-metrics)",
                                                       false)};
-                   return core::Command{core::NodeConfigWrite{n, std::move(body), false}};
+                   return core::Command{decode_node_settings(ctx.status, req, n, body)};
                  }));
 }
 
 void delete_node_config(const Context& ctx, const Request& req, Responder respond) {
   config_request(ctx, req, std::move(respond), config_command(req, core::Operation::config_write, [](std::uint8_t n) {
-                   return core::Command{core::NodeConfigWrite{n, {}, true}};
+                   core::NodeConfigWrite revert;
+                   revert.node = n;
+                   revert.revert = true;
+                   return core::Command{std::move(revert)};
                  }));
 }
 
@@ -102,7 +126,7 @@ void put_node_eds(const Context& ctx, const Request& req, Responder respond) {
                          json_result<core::NodeConfigView>(std::move(respond), [](const core::NodeConfigView& v) {
                            auto out = node_config_json(v);
                            json::array warnings;
-                           for (const auto& w : v.warnings) warnings.emplace_back(w);
+                           for (const auto& w : v.warnings) warnings.emplace_back(edstool::warning_line(v.eds_name, w));
                            out["warnings"] = std::move(warnings);
                            return out;
                          }));

@@ -18,3 +18,11 @@ target_link_libraries(gateway_sparkplug PUBLIC canopen_core gateway_core_types c
 add_library(gateway_sparkplug_client STATIC ${CMAKE_CURRENT_LIST_DIR}/edge_client.cpp)
 target_link_libraries(gateway_sparkplug_client PUBLIC gateway_sparkplug gateway_mqtt_client gateway_metrics gateway_lib
                                                PRIVATE canopen_options)
+# The Sparkplug B front end as the composition root makes it (edge_node.hpp):
+# the EdgeClient and the CANopen side (sparkplug_output.hpp: stack events to
+# births and data, NCMD/DCMD to request-core commands), given the request
+# core and the status view only.
+add_library(gateway_sparkplug_node STATIC ${CMAKE_CURRENT_LIST_DIR}/sparkplug_output.cpp
+                                          ${CMAKE_CURRENT_LIST_DIR}/edge_node.cpp)
+target_link_libraries(gateway_sparkplug_node PUBLIC gateway_sparkplug_client gateway_core gateway_status gateway_pipeline
+                                             PRIVATE canopen_options)

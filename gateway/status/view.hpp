@@ -76,6 +76,9 @@ class View {
   virtual std::chrono::steady_clock::time_point started_at() const = 0;
   // The configured networks, numbered from 1 in this order.
   virtual const std::vector<NetworkConfig>& networks() const = 0;
+  // The configuration file ("" = command line only): relative file names in
+  // run-time node settings resolve against its directory, as in the file.
+  virtual const std::string& config_file() const = 0;
   // http.max-program-bytes: the body limit of PUT .../program/{n}.
   virtual std::size_t max_program_bytes() const = 0;
 
@@ -92,6 +95,10 @@ class View {
   virtual std::optional<canopen::can::BusState> bus_state(std::uint32_t net) const = 0;
   // The configured nodes of `net` in node-ID order; empty for an unknown network.
   virtual std::vector<NodeOrigin> node_origins(std::uint32_t net) const = 0;
+  // The settings of `net`'s configured nodes as they apply now (the file,
+  // the state-dir overlay, run-time changes), in configuration order; empty
+  // for an unknown network.
+  virtual std::vector<NodeConfig> configured_nodes(std::uint32_t net) const = 0;
   // The PDO configuration in use for the described nodes of `net`; nullptr for an unknown network.
   virtual const canopen::pdo::RemotePdoTable* pdo_config(std::uint32_t net) const = 0;
   // The frame tap of `net` (trace WebSocket, capture ring, bus load); null

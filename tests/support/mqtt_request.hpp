@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "mqtt/mqtt_requests.hpp"
+#include "mqtt_requests/mqtt_requests.hpp"
 
 namespace test {
 

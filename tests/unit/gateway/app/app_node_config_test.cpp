@@ -99,6 +99,8 @@ struct Rig {
     const auto ev = json::parse(events[*at]->json).as_object();
     return ev.contains("values") ? ev.at("values").as_array() : json::array{};
   }
+  // PUT .../config of `node` with the JSON body `text`, decoded as REST does.
+  core::NodeConfigWrite put(std::uint8_t node, std::string_view text) const;
   std::uint64_t own_1016(std::uint8_t sub) { return app->own_dictionary(1)->get_unsigned(0x1016, sub).value_or(0); }
 
   MemoryLog mlog;
@@ -117,7 +119,32 @@ const core::Problem& problem(const core::Result& r) {
   return std::get<core::Problem>(r);
 }
 
-json::value body(std::string_view text) { return json::parse(text); }
+// A PUT .../config body decoded as REST decodes it (config/: the
+// configuration file's rules; what does not decode travels in `invalid`).
+core::NodeConfigWrite decoded(std::uint8_t node, std::string_view text, const Config& config) {
+  core::NodeConfigWrite w;
+  w.node = node;
+  try {
+    w.settings = node_config_from_request(json::parse(text), node, config.networks.at(0), config.source);
+  } catch (const ConfigError& e) {
+    w.invalid = e.what();
+  }
+  return w;
+}
+core::NodeConfigWrite Rig::put(std::uint8_t node, std::string_view text) const {
+  return decoded(node, text, app->config());
+}
+core::NodeConfigWrite revert(std::uint8_t node) {
+  core::NodeConfigWrite w;
+  w.node = node;
+  w.revert = true;
+  return w;
+}
+// The settings as REST answers them (the keys of a `nodes:` entry).
+json::object settings_json(const core::NodeConfigView& v) {
+  EXPECT_TRUE(v.settings.has_value());
+  return v.settings ? node_config_json(*v.settings) : json::object{};
+}
 
 bool has_consumer(Rig& rig, std::uint64_t entry) {
   for (std::uint8_t sub = 1; sub <= rig.own_1016(0); ++sub)
@@ -132,17 +159,16 @@ TEST(AppNodeConfig, GetShowsTheConfigurationAndAPutAppliesAtOnce) {
   Rig rig(dir.path);
   const auto before = rig.view(10);
   EXPECT_EQ(before.source, "config");
-  EXPECT_EQ(before.settings.at("name"), "io-rack-1");
-  EXPECT_EQ(before.settings.at("eds"), "(built in)");
-  EXPECT_EQ(before.settings.at("heartbeat-consumer-ms"), 2000);
+  EXPECT_EQ(settings_json(before).at("name"), "io-rack-1");
+  EXPECT_EQ(settings_json(before).at("eds"), "(built in)");
+  EXPECT_EQ(settings_json(before).at("heartbeat-consumer-ms"), 2000);
 
   for (const Role r : {Role::Viewer, Role::Operator})
-    EXPECT_EQ(problem(rig.run(core::NodeConfigWrite{10, body(R"({"name": "x"})"), false}, r)).status, 403);
+    EXPECT_EQ(problem(rig.run(rig.put(10, R"({"name": "x"})"), r)).status, 403);
 
-  const auto put = rig.run(core::NodeConfigWrite{
-      10, body(R"x({"name": "io-left", "eds": "(built in)", "heartbeat-consumer-ms": 1500})x"), false});
-  ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(put)) << problem(put).detail;
-  const auto& v = std::get<core::NodeConfigView>(put);
+  const auto changed = rig.run(rig.put(10, R"x({"name": "io-left", "eds": "(built in)", "heartbeat-consumer-ms": 1500})x"));
+  ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(changed)) << problem(changed).detail;
+  const auto& v = std::get<core::NodeConfigView>(changed);
   EXPECT_EQ(v.source, "state-dir");
   EXPECT_EQ(v.file, (dir.path / "nodes/net1-node10.yaml").string());
   EXPECT_TRUE(fs::exists(v.file));
@@ -162,15 +188,15 @@ TEST(AppNodeConfig, GetShowsTheConfigurationAndAPutAppliesAtOnce) {
 TEST(AppNodeConfig, AnInvalidPutIs400WithTheParsersReasonAndChangesNothing) {
   TempDir dir;
   Rig rig(dir.path);
-  const auto bad = rig.run(core::NodeConfigWrite{10, body(R"({"heartbeat-consumer-ms": "never"})"), false});
+  const auto bad = rig.run(rig.put(10, R"({"heartbeat-consumer-ms": "never"})"));
   EXPECT_EQ(problem(bad).status, 400);
   EXPECT_EQ(problem(bad).detail,
             "request body: heartbeat-consumer-ms: 'never' is not auto, 0 (not watched) or a consumer time in ms "
             "(1..65535)");
-  EXPECT_EQ(problem(rig.run(core::NodeConfigWrite{10, body(R"({"guarding": {"guard-time-ms": 100}})"), false})).detail,
+  EXPECT_EQ(problem(rig.run(rig.put(10, R"({"guarding": {"guard-time-ms": 100}})"))).detail,
             "request body: guarding: guard-time-ms and life-time-factor must both be set (or both 0)");
-  EXPECT_EQ(problem(rig.run(core::NodeConfigWrite{10, body(R"({"id": 11})"), false})).status, 400);
-  EXPECT_EQ(problem(rig.run(core::NodeConfigWrite{10, body(R"({"eds": "/no/such.eds"})"), false})).status, 400);
+  EXPECT_EQ(problem(rig.run(rig.put(10, R"({"id": 11})"))).status, 400);
+  EXPECT_EQ(problem(rig.run(rig.put(10, R"({"eds": "/no/such.eds"})"))).status, 400);
   EXPECT_EQ(rig.view(10).source, "config");
   EXPECT_EQ(rig.app->cache().node(1, 10)->name, "io-rack-1");
   EXPECT_TRUE(has_consumer(rig, 0x000A0000 | 2000));
@@ -189,7 +215,7 @@ TEST(AppNodeConfig, AnEdsUploadMakesTheTpdosDecodedAtOnce) {
     return n != nullptr && n->state == canopen::NmtState::Operational;
   }));
   ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(
-      rig.run(core::NodeConfigWrite{10, body(R"({"name": "io-rack-1"})"), false})));
+      rig.run(rig.put(10, R"({"name": "io-rack-1"})"))));
   EXPECT_EQ(rig.app->description(1, 10), nullptr);
   // No EDS: its TPDO1 (18Ah) is a PDO nobody claims, raw bytes only.
   const auto mark = rig.events.size();
@@ -210,8 +236,8 @@ TEST(AppNodeConfig, AnEdsUploadMakesTheTpdosDecodedAtOnce) {
 
   const auto ok = rig.run(core::NodeEdsWrite{10, text, "cia401-io-module.eds"});
   ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(ok)) << problem(ok).detail;
-  EXPECT_EQ(std::get<core::NodeConfigView>(ok).settings.at("eds").as_string(), (dir.path / "nodes/net1-node10.eds").string());
-  EXPECT_EQ(std::get<core::NodeConfigView>(ok).settings.at("name"), "io-rack-1") << "the other settings stay";
+  EXPECT_EQ(settings_json(std::get<core::NodeConfigView>(ok)).at("eds").as_string(), (dir.path / "nodes/net1-node10.eds").string());
+  EXPECT_EQ(settings_json(std::get<core::NodeConfigView>(ok)).at("name"), "io-rack-1") << "the other settings stay";
   EXPECT_EQ(read_file(dir.path / "nodes/net1-node10.eds"), text);
   ASSERT_NE(rig.app->description(1, 10), nullptr) << "OD browser and SDO typing";
   const auto values = rig.next_tpdo_values(10);
@@ -227,21 +253,21 @@ TEST(AppNodeConfig, ChangesSurviveARestartAndDeleteGoesBack) {
   {
     Rig rig(dir.path);
     ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(
-        rig.run(core::NodeConfigWrite{11, body(R"({"name": "io-right", "heartbeat-consumer-ms": 0})"), false})));
+        rig.run(rig.put(11, R"({"name": "io-right", "heartbeat-consumer-ms": 0})"))));
     ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(
         rig.run(core::NodeEdsWrite{11, read_file(kIoEds), "io.eds"})));
   }
   Rig rig(dir.path);
   const auto v = rig.view(11);
   EXPECT_EQ(v.source, "state-dir");
-  EXPECT_EQ(v.settings.at("name"), "io-right");
-  EXPECT_EQ(v.settings.at("heartbeat-consumer-ms"), 0);
+  EXPECT_EQ(settings_json(v).at("name"), "io-right");
+  EXPECT_EQ(settings_json(v).at("heartbeat-consumer-ms"), 0);
   EXPECT_EQ(rig.app->cache().node(1, 11)->name, "io-right");
   EXPECT_NE(rig.app->description(1, 11), nullptr) << "the kept EDS";
   EXPECT_FALSE(has_consumer(rig, 0x000B0000 | 2000));
   EXPECT_EQ(rig.view(5).source, "config") << "the other nodes keep the configuration's";
 
-  const auto back = rig.run(core::NodeConfigWrite{11, {}, true});
+  const auto back = rig.run(revert(11));
   ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(back));
   EXPECT_EQ(std::get<core::NodeConfigView>(back).source, "config");
   EXPECT_EQ(rig.app->cache().node(1, 11)->name, "io-rack-2");
@@ -276,8 +302,7 @@ TEST(AppNodeConfig, ABrokenKeptFileIsLoggedAndTheConfigurationsSettingsApply) {
 TEST(AppNodeConfig, AConsumerChangedAtRunTimeSurvivesAResetCommunicationOfTheOwnNode) {
   TempDir dir;
   Rig rig(dir.path);
-  ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(rig.run(core::NodeConfigWrite{
-      10, body(R"x({"name": "io-rack-1", "eds": "(built in)", "heartbeat-consumer-ms": 1500})x"), false})));
+  ASSERT_TRUE(std::holds_alternative<core::NodeConfigView>(rig.run(rig.put(10, R"x({"name": "io-rack-1", "eds": "(built in)", "heartbeat-consumer-ms": 1500})x"))));
   ASSERT_TRUE(has_consumer(rig, 0x000A0000 | 1500));
   ASSERT_TRUE(std::holds_alternative<core::NmtSent>(rig.run(core::Nmt{127, canopen::NmtCommand::ResetCommunication})));
   rig.io.run_for(200ms);
@@ -289,7 +314,7 @@ TEST(AppNodeConfig, AConsumerChangedAtRunTimeSurvivesAResetCommunicationOfTheOwn
 // Without a state-dir a change would be gone at the next start: refused.
 TEST(AppNodeConfig, WithoutAStateDirAChangeIs409) {
   Rig rig(fs::path{});
-  const auto r = rig.run(core::NodeConfigWrite{10, body(R"({"name": "x"})"), false});
+  const auto r = rig.run(rig.put(10, R"({"name": "x"})"));
   EXPECT_EQ(problem(r).status, 409);
   EXPECT_THAT(problem(r).detail, HasSubstr("no state-dir"));
   EXPECT_EQ(rig.app->cache().node(1, 10)->name, "io-rack-1");

@@ -1,13 +1,15 @@
 // The gateway process with its Sparkplug B edge node on a real mosquitto
-// (skipped without it): the App owns the EdgeClient, starts it after MQTT
-// and stops it before the networks and the native session close.
+// (skipped without it): made by the composition root (add_sparkplug), owned
+// by the App, which starts it after MQTT and stops it before the networks
+// and the native session close.
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <memory>
 
 #include "app/app.hpp"
-#include "sparkplug/edge_client.hpp"
+#include "app/front_ends.hpp"
+#include "sparkplug/edge_node.hpp"
 #include "unit/gateway/mqtt/mqtt_support.hpp"
 
 namespace gateway {
@@ -45,15 +47,17 @@ TEST(AppSparkplug, EdgeNodeRunsBesideMqttAndSaysNdeathFirstAtStop) {
     SCOPED_TRACE(run);
     IoThread io;
     std::unique_ptr<App> app;
+    const sparkplug::EdgeNode* node = nullptr;
     io.call([&] {
       app = std::make_unique<App>(io.io(), config, log);
+      node = add_sparkplug(io.io(), *app, log);
       app->start();
       return 0;
     });
     ASSERT_TRUE(eventually([&] { return host.on_topic("spBv1.0/plant1/NBIRTH/test").size() == std::size_t(run + 1); }))
         << broker.log();
     io.call([&] {
-      const auto* sp = app->sparkplug();
+      const auto* sp = node != nullptr ? &node->client() : nullptr;
       EXPECT_NE(sp, nullptr);
       if (sp == nullptr) return 0;
       EXPECT_TRUE(sp->connected());

@@ -33,8 +33,7 @@ MqttConfig config(std::chrono::milliseconds heartbeat_min_interval, const mqtt_t
 
 struct Rig {
   explicit Rig(MqttConfig c, const std::vector<MqttOutput::Node>& nodes = {})
-      : out(io, std::move(c), "gw", log, MqttOutput::Status{"1.2.3", 9, {1, 2}, Clock::now() - 5s}, nodes,
-            [](core::Request, core::RequestCore::Done) {}) {}
+      : out(io, std::move(c), "gw", log, MqttOutput::Status{"1.2.3", 9, {1, 2}, Clock::now() - 5s}, nodes) {}
   boost::asio::io_context io;
   Logger log{LogLevel::Error};
   MqttOutput out;

@@ -1,12 +1,12 @@
 // Run-time node configuration in the request core (gateway/core/node_config.cpp)
 // against a fake NodeSettings: contract "Remote configuration and
 // maintenance" (GET viewer, PUT/DELETE and the EDS upload admin), the own
-// node refused, an EDS/DCF read as `canopen-eds check` reads it (400 with
-// "FILE:LINE: reason", nothing handed on), an audit line for every change.
+// node refused, settings the front end could not decode or for another node
+// refused (400, nothing handed on), an EDS/DCF read as `canopen-eds check`
+// reads it (400 with "FILE:LINE: reason", nothing handed on), an audit line
+// for every change.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-
-#include <boost/json/parse.hpp>
 
 #include "core/node_settings.hpp"
 #include "core/request_core.hpp"
@@ -21,9 +21,14 @@ using test_support::kOwnNode;
 
 struct FakeSettings final : NodeSettings {
   NodeConfigView node_config(std::uint32_t net, std::uint8_t node) const override {
-    return NodeConfigView{net, node, settings, source, {}, {}};
+    NodeConfigView v;
+    v.network = net;
+    v.node = node;
+    v.settings = settings;
+    v.source = source;
+    return v;
   }
-  Result write_node_config(std::uint32_t net, std::uint8_t node, const boost::json::value& s) override {
+  Result write_node_config(std::uint32_t net, std::uint8_t node, const NodeConfig& s) override {
     ++writes;
     if (refuse) return *refuse;
     settings = s;
@@ -43,12 +48,34 @@ struct FakeSettings final : NodeSettings {
     source = "config";
     return node_config(net, node);
   }
-  boost::json::value settings = boost::json::parse(R"({"id": 5, "name": "from-yaml"})");
+  NodeConfig settings{5, "from-yaml", {}, {}, {}, {}, {}};
   std::string source = "config";
   std::optional<Problem> refuse;
   int writes = 0;
   std::string eds_text, product;
 };
+
+// A decoded PUT .../config of node `node` named `name`; the revert (DELETE);
+// settings that did not decode, with the parser's reason.
+NodeConfigWrite named(std::uint8_t node, std::string name) {
+  NodeConfigWrite w;
+  w.node = node;
+  w.settings.id = node;
+  w.settings.name = std::move(name);
+  return w;
+}
+NodeConfigWrite revert(std::uint8_t node) {
+  NodeConfigWrite w;
+  w.node = node;
+  w.revert = true;
+  return w;
+}
+NodeConfigWrite undecoded(std::uint8_t node, std::string why) {
+  NodeConfigWrite w;
+  w.node = node;
+  w.invalid = std::move(why);
+  return w;
+}
 
 struct Rig {
   Rig() { core.set_node_settings(&settings); }
@@ -97,46 +124,60 @@ TEST(RequestCoreNodeConfig, ReadIsViewerChangesAreAdminAndRefusalsChangeNothing)
   const auto view = rig.run(NodeConfigRead{5}, Role::Viewer);
   ASSERT_TRUE(std::holds_alternative<NodeConfigView>(view));
   EXPECT_EQ(std::get<NodeConfigView>(view).source, "config");
-  EXPECT_EQ(std::get<NodeConfigView>(view).settings.at("name"), "from-yaml");
+  EXPECT_EQ(std::get<NodeConfigView>(view).settings->name, "from-yaml");
 
   for (const Role r : {Role::Viewer, Role::Operator}) {
-    EXPECT_EQ(problem(rig.run(NodeConfigWrite{5, boost::json::parse(R"({"name": "x"})"), false}, r)).status, 403);
+    EXPECT_EQ(problem(rig.run(named(5, "x"), r)).status, 403);
     EXPECT_EQ(problem(rig.run(NodeEdsWrite{5, kGoodEds, "io.eds"}, r)).status, 403);
-    EXPECT_EQ(problem(rig.run(NodeConfigWrite{5, {}, true}, r)).status, 403);
+    EXPECT_EQ(problem(rig.run(revert(5), r)).status, 403);
+    EXPECT_EQ(problem(rig.run(undecoded(5, "request body: bad"), r)).status, 403) << "bad input gets no cheaper way past";
   }
   EXPECT_EQ(problem(rig.run(NodeConfigRead{5}, Role::None)).status, 401);
   EXPECT_EQ(rig.settings.writes, 0);
   EXPECT_TRUE(rig.audited("auth failure: alice: configuration change net 1 node 5: 403"));
 
-  const auto changed = rig.run(NodeConfigWrite{5, boost::json::parse(R"({"name": "x"})"), false});
+  const auto changed = rig.run(named(5, "x"));
   ASSERT_TRUE(std::holds_alternative<NodeConfigView>(changed));
   EXPECT_EQ(std::get<NodeConfigView>(changed).source, "state-dir");
+  EXPECT_EQ(rig.settings.settings.name, "x") << "the typed settings are handed on";
   EXPECT_TRUE(rig.audited("node configuration: alice: net 1 node 5: configuration changed (settings from state-dir)"));
-  const auto reverted = rig.run(NodeConfigWrite{5, {}, true});
+  const auto reverted = rig.run(revert(5));
   ASSERT_TRUE(std::holds_alternative<NodeConfigView>(reverted));
   EXPECT_EQ(std::get<NodeConfigView>(reverted).source, "config");
   EXPECT_TRUE(rig.audited("configuration reverted to the configuration file"));
 }
 
-// What the settings refuse (a bad value: the file parser's reason) is
-// answered as it is and audited.
+// What the front end could not decode (a bad value: the file parser's
+// reason) and what the settings refuse are answered as they are and
+// audited; neither changes anything.
 TEST(RequestCoreNodeConfig, ARefusedChangeIsAnsweredWithItsReasonAndAudited) {
   Rig rig;
-  Problem p;
-  p.status = 400;
-  p.detail = "request body: heartbeat-consumer-ms: 'never' is not auto, 0 (not watched) or a consumer time in ms (1..65535)";
-  rig.settings.refuse = p;
-  const auto r = rig.run(NodeConfigWrite{5, boost::json::parse(R"({"heartbeat-consumer-ms": "never"})"), false});
+  const std::string why =
+      "request body: heartbeat-consumer-ms: 'never' is not auto, 0 (not watched) or a consumer time in ms (1..65535)";
+  const auto r = rig.run(undecoded(5, why));
   EXPECT_EQ(problem(r).status, 400);
-  EXPECT_EQ(problem(r).detail, p.detail);
+  EXPECT_EQ(problem(r).detail, why);
   EXPECT_TRUE(rig.audited("node configuration refused: alice: net 1 node 5: configuration changed: 400 request body"));
+  EXPECT_EQ(rig.settings.writes, 0) << "nothing reached the settings";
+
+  auto other = named(5, "x");
+  other.settings.id = 11;
+  EXPECT_EQ(problem(rig.run(other)).detail, "request body: id: 11 is not the node of the path (5)");
+  EXPECT_EQ(rig.settings.writes, 0);
+
+  Problem p;
+  p.status = 409;
+  p.detail = "no state-dir is configured";
+  rig.settings.refuse = p;
+  EXPECT_EQ(problem(rig.run(named(5, "x"))).detail, p.detail);
+  EXPECT_TRUE(rig.audited("node configuration refused: alice: net 1 node 5: configuration changed: 409 no state-dir"));
 }
 
 // The gateway's own node has no `nodes:` entry: its settings are the network's.
 TEST(RequestCoreNodeConfig, TheOwnNodeIsNotANodeEntry) {
   Rig rig;
   EXPECT_EQ(problem(rig.run(NodeConfigRead{kOwnNode}, Role::Viewer)).status, 400);
-  const auto r = rig.run(NodeConfigWrite{kOwnNode, boost::json::parse("{}"), false});
+  const auto r = rig.run(named(kOwnNode, "x"));
   EXPECT_THAT(problem(r).detail, HasSubstr("is the gateway's own node-ID"));
   EXPECT_EQ(problem(rig.run(NodeConfigRead{0}, Role::Viewer)).status, 400) << "node-IDs are 1..127";
   EXPECT_EQ(rig.settings.writes, 0);

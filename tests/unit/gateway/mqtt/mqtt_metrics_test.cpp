@@ -31,9 +31,8 @@ TEST(MqttMetrics, RegisteredFamiliesFollowThePublisherBuiltAfterRegistration) {
     // The slots as the owner holds them: registered before the publisher
     // exists (it is built at start), read at scrape time.
     std::unique_ptr<MqttPublisher> publisher;
-    const std::unique_ptr<MqttRequests> no_requests;
     metrics::Registry r;
-    register_metrics(r, publisher, no_requests);
+    register_metrics(r, publisher, {});  // no request front end
     const std::string before = r.render();
     EXPECT_NE(before.find("canopen_gateway_mqtt_enabled 1\n"), std::string::npos);
     EXPECT_NE(before.find("canopen_gateway_mqtt_messages_total{result=\"published\"} 0\n"), std::string::npos);

@@ -5,7 +5,8 @@
 if(NOT TARGET PahoMqttCpp::paho-mqttpp3)  # found once per build (app tests use it too)
   find_package(PahoMqttCpp REQUIRED)
 endif()
-canopen_unit_test(mqtt_tests SOURCES ${U}/gateway/mqtt/*_test.cpp LIBS gateway_mqtt PahoMqttCpp::paho-mqttpp3)
+# publisher_test.cpp: requests through the publisher to the request front end.
+canopen_unit_test(mqtt_tests SOURCES ${U}/gateway/mqtt/*_test.cpp LIBS gateway_mqtt gateway_mqtt_requests PahoMqttCpp::paho-mqttpp3)
 if(TARGET mqtt_tests)
   add_executable(mqtt_publish_tool ${U}/gateway/mqtt/mqtt_publish_tool.cpp)
   target_link_libraries(mqtt_publish_tool PRIVATE gateway_mqtt canopen_options)

@@ -3,6 +3,7 @@
 #include "mqtt/publisher.hpp"
 
 #include "mqtt/client.hpp"
+#include "mqtt_requests/mqtt_requests.hpp"
 #include "support/memory_log.hpp"
 
 #include <gtest/gtest.h>

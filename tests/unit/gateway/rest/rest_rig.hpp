@@ -55,6 +55,9 @@ struct RestRig {
     if (configure) configure(c);
     log = log_to != nullptr ? std::make_unique<Logger>(LogLevel::Info, log_to) : std::make_unique<Logger>(LogLevel::Error);
     app = std::make_unique<App>(io, c, *log);
+    // The front ends as canopen-gateway makes them (app/front_ends.hpp).
+    serve_mqtt_requests(*app, *log);
+    add_sparkplug(io, *app, *log);
     http::HttpConfig hc;
     hc.address = "127.0.0.1";
     hc.port = 0;

@@ -9,7 +9,7 @@ if(NOT TARGET PahoMqttCpp::paho-mqttpp3)  # found once per build (app tests use 
   find_package(PahoMqttCpp REQUIRED)
 endif()
 canopen_unit_test(sparkplug_tests SOURCES ${U}/gateway/sparkplug/*_test.cpp
-                  LIBS gateway_sparkplug gateway_sparkplug_client sparkplug_proto gateway_rest_parse PahoMqttCpp::paho-mqttpp3)
+                  LIBS gateway_sparkplug gateway_sparkplug_client gateway_sparkplug_node sparkplug_proto gateway_rest_parse PahoMqttCpp::paho-mqttpp3)
 if(TARGET sparkplug_tests)
   target_compile_definitions(sparkplug_tests PRIVATE CANOPEN_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
 endif()

@@ -1,4 +1,4 @@
-#include "app/sparkplug_output.hpp"
+#include "sparkplug/sparkplug_output.hpp"
 
 #include <chrono>
 

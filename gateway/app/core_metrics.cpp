@@ -1,13 +1,15 @@
-#include "core/core_metrics.hpp"
+#include "app/core_metrics.hpp"
 
 #include <array>
 #include <vector>
 
 #include "metrics/metrics.hpp"
 
-namespace gateway::core {
+namespace gateway {
 
-void register_metrics(metrics::Registry& r, const Counters& counters) {
+using core::Counters;
+
+void register_core_metrics(metrics::Registry& r, const Counters& counters) {
   const Counters* c = &counters;
   metrics::register_requests(
       r,
@@ -54,4 +56,4 @@ void register_metrics(metrics::Registry& r, const Counters& counters) {
   }
 }
 
-}  // namespace gateway::core
+}  // namespace gateway

@@ -4,7 +4,7 @@
 // no broker: what it publishes is decoded with the generated parser. The
 // request core is a fake that records requests and answers as told, and
 // once the real RequestCore over the fake networks, for roles and audit.
-#include "app/sparkplug_output.hpp"
+#include "sparkplug/sparkplug_output.hpp"
 
 #include <gtest/gtest.h>
 

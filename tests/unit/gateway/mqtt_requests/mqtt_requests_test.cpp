@@ -1,7 +1,7 @@
 // The MQTT request unit without a broker: a request PUBLISH decoded once
 // into a core::Request with its reply address, and the reply encoded with
 // the correlation id (publisher_test.cpp has the same over a real broker).
-#include "mqtt/mqtt_requests.hpp"
+#include "mqtt_requests/mqtt_requests.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,22 +1,24 @@
 // The request core's metrics as its owner registers them
-// (gateway/core/core_metrics.hpp): read from the core's Counters at scrape
+// (gateway/app/core_metrics.hpp): read from the core's Counters at scrape
 // time, the refusal families always there, the SDO latency histogram with
 // the core's bounds.
-#include "core/core_metrics.hpp"
+#include "app/core_metrics.hpp"
 
 #include <gtest/gtest.h>
 
 #include <string>
 
-namespace gateway::core {
+namespace gateway {
 namespace {
+
+using core::Counters;
 
 bool has_line(const std::string& text, const std::string& line) { return text.find(line + "\n") != std::string::npos; }
 
 TEST(CoreMetrics, FamiliesFollowTheCountersAfterRegistration) {
   Counters c;
   metrics::Registry r;
-  register_metrics(r, c);
+  register_core_metrics(r, c);
   const std::string before = r.render();
   EXPECT_TRUE(has_line(before, "canopen_gateway_sdo_requests_total 0"));
   // Counted 0 so far, but /metrics has the refusal families from the start.
@@ -58,7 +60,7 @@ TEST(CoreMetrics, FamiliesFollowTheCountersAfterRegistration) {
 TEST(CoreMetrics, MaintenanceOperationsByOperationAndResult) {
   Counters c;
   metrics::Registry r;
-  register_metrics(r, c);
+  register_core_metrics(r, c);
   EXPECT_TRUE(has_line(r.render(),
                        "canopen_gateway_maintenance_operations_total{operation=\"program-download\",result=\"failed\"} 0"));
   c.maintenance[Counters::program_download][Counters::ok] = 2;
@@ -72,4 +74,4 @@ TEST(CoreMetrics, MaintenanceOperationsByOperationAndResult) {
 }
 
 }  // namespace
-}  // namespace gateway::core
+}  // namespace gateway

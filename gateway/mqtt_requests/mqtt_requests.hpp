@@ -1,4 +1,6 @@
-// Requests over MQTT (../shared/api-contract.md): the publisher subscribes
+// The MQTT request front end (../shared/api-contract.md): made by the
+// composition root (app/front_ends.hpp: serve_mqtt_requests) from the
+// request core alone and handed to the App, whose publisher then subscribes
 // (QoS 1) to request_filters() (topic_filter.hpp: canopen/<gw>/+/+/sdo/read,
 // .../sdo/write and .../nmt) and hands every PUBLISH it receives on them to
 // MqttRequests::on_publish. This unit decodes topic and body once into a
@@ -45,6 +47,7 @@
 #include "core/request.hpp"
 #include "log.hpp"
 #include "mqtt/mqtt_codec.hpp"
+#include "mqtt/reply_sender.hpp"
 #include "messages/request_codec.hpp"
 
 namespace gateway::mqtt {
@@ -52,11 +55,6 @@ namespace gateway::mqtt {
 // Largest MQTT 5 correlation data, or 3.1.1 correlationId as JSON text, a
 // request may carry (the reply echoes it).
 constexpr std::size_t kMaxCorrelation = 1024;
-
-// How the publisher took a reply (MqttPublisher::reply_sender).
-enum class ReplyOutcome : std::uint8_t { sent, not_connected, not_encodable, gone };
-using ReplySender =
-    std::function<ReplyOutcome(std::string_view topic, std::string_view body, const codec::PublishProperties& props)>;
 
 // Where a request's reply goes, as decoded from it.
 struct ReplyAddress {

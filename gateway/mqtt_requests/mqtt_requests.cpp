@@ -1,5 +1,5 @@
 #include "canopen/json_value.hpp"
-#include "mqtt/mqtt_requests.hpp"
+#include "mqtt_requests/mqtt_requests.hpp"
 
 #include <boost/json/parse.hpp>
 #include <boost/json/serialize.hpp>

@@ -54,7 +54,7 @@
 #include "canopen/eds/eds.hpp"
 #include "canopen/events.hpp"
 #include "canopen/pdo/remote_config.hpp"
-#include "config/config.hpp"
+#include "core/node_entry.hpp"
 #include "core/request_core.hpp"
 #include "log.hpp"
 #include "sparkplug/device_model.hpp"
