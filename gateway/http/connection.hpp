@@ -92,6 +92,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
 
   void registered() { impl_->connections[id_] = weak_from_this(); }
   std::optional<SteadyTime> idle_since() const override { return idle_since_; }
+  bool from_address(const std::string& key) const override { return slot_ && slot_->address() == key; }
 
   // Sends `r` for the current request; ignored when it is not `pending`.
   void reply(const std::shared_ptr<PendingReply>& pending, Response r);

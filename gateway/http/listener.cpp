@@ -60,15 +60,21 @@ void HttpServer::Impl::on_accept(error_code ec, tcp::socket socket) {
   }
   std::string address = address_key(ep.address());
   const auto held = per_address.find(address);
-  if (cfg.max_connections_per_address > 0 && held != per_address.end() &&
-      held->second >= cfg.max_connections_per_address) {
+  // At an address's cap its longest idle connection makes room (every
+  // client behind one reverse proxy shares an address); refused only when
+  // all of that address's connections are busy.
+  const bool at_cap = cfg.max_connections_per_address > 0 && held != per_address.end() &&
+                      held->second >= cfg.max_connections_per_address;
+  const bool made_room = at_cap && evict_idle(&address);
+  if (at_cap && !made_room) {
     counters.rejected_per_address.fetch_add(1, std::memory_order_relaxed);
     socket.close(ignored);
     note_refusal(address, "client " + address + " has " + std::to_string(held->second) +
                               " connections open (http.max-connections-per-address): closing its new ones");
     return do_accept();
   }
-  if (counters.active.load(std::memory_order_relaxed) >= cfg.max_connections && !evict_idle()) {
+  // (A connection evicted for this address also makes room in the total.)
+  if (!made_room && counters.active.load(std::memory_order_relaxed) >= cfg.max_connections && !evict_idle()) {
     counters.rejected_full.fetch_add(1, std::memory_order_relaxed);
     socket.close(ignored);
     note_refusal("", std::to_string(cfg.max_connections) +
@@ -84,12 +90,12 @@ void HttpServer::Impl::on_accept(error_code ec, tcp::socket socket) {
 }
 
 // Closes the connection that has waited longest for a request, if any.
-bool HttpServer::Impl::evict_idle() {
+bool HttpServer::Impl::evict_idle(const std::string* key) {
   std::shared_ptr<Closable> oldest;
   SteadyTime since{};
   for (auto& [id, w] : connections) {
     auto c = w.lock();
-    if (!c) continue;
+    if (!c || (key && !c->from_address(*key))) continue;
     if (auto t = c->idle_since(); t && (!oldest || *t < since)) {
       oldest = std::move(c);
       since = *t;
@@ -97,7 +103,8 @@ bool HttpServer::Impl::evict_idle() {
   }
   if (!oldest) return false;
   counters.evicted_idle.fetch_add(1, std::memory_order_relaxed);
-  debug("server full: closing the longest idle connection for a new one");
+  debug(key ? "client " + *key + " at http.max-connections-per-address: closing its longest idle connection for a new one"
+            : std::string("server full: closing the longest idle connection for a new one"));
   oldest->shutdown();
   return true;
 }

@@ -59,6 +59,8 @@ class Closable {
   // Since when it has been waiting for a request (nullopt: busy, or not an
   // HTTP connection): such a connection may be closed for a new one.
   virtual std::optional<SteadyTime> idle_since() const { return std::nullopt; }
+  // Whether it is a connection from client address `key` (address_key).
+  virtual bool from_address(const std::string& /*key*/) const { return false; }
 };
 
 // "address:port", IPv6 addresses in brackets.
@@ -107,7 +109,9 @@ struct HttpServer::Impl : std::enable_shared_from_this<HttpServer::Impl> {
   }
   void do_accept();
   void on_accept(error_code ec, tcp::socket socket);
-  bool evict_idle();
+  // Closes the longest idle connection (of client address `key`, or of any
+  // when it is null); false when there is none.
+  bool evict_idle(const std::string* key = nullptr);
   void note_refusal(const std::string& key, const std::string& message);
   void stop();
 };
@@ -126,6 +130,7 @@ class AddressSlot {
   }
   AddressSlot(const AddressSlot&) = delete;
   AddressSlot& operator=(const AddressSlot&) = delete;
+  const std::string& address() const { return address_; }
 
  private:
   std::shared_ptr<HttpServer::Impl> impl_;

@@ -267,12 +267,13 @@ void register_http_server(Registry& r, std::function<HttpServerMetrics()> read, 
   r.gauge_fn(conns, conns_help, {{"state", "idle"}}, conn(&HttpConnectionMetrics::idle));
   static constexpr std::string_view refused = "canopen_gateway_http_connections_refused_total";
   static constexpr std::string_view refused_help =
-      "New connections closed at once: their client address had http.max-connections-per-address open "
-      "(per-address), or http.max-connections were open and none idle (full).";
+      "New connections closed at once: their client address had http.max-connections-per-address open, "
+      "none idle (per-address), or http.max-connections were open and none idle (full).";
   r.counter_fn(refused, refused_help, {{"reason", "per-address"}}, conn(&HttpConnectionMetrics::refused_per_address));
   r.counter_fn(refused, refused_help, {{"reason", "full"}}, conn(&HttpConnectionMetrics::refused_full));
   r.counter_fn("canopen_gateway_http_connections_evicted_total",
-               "Idle connections closed to admit a new one at http.max-connections.", {},
+               "Idle connections closed to admit a new one at http.max-connections or at its address's "
+               "http.max-connections-per-address.", {},
                conn(&HttpConnectionMetrics::evicted_idle));
   r.counter_fn("canopen_gateway_http_header_timeouts_total",
                "Connections closed because a request header did not arrive in time (slow clients).", {},

@@ -58,10 +58,10 @@ pass "plain HTTP refused on the HTTPS port: $(tail -1 "$T/plain.out")"
 # Before rest_client.py: its 429 check leaves requests pending on 127.0.0.1.
 /usr/bin/python3 "$DIR/hostile_client.py" 8443 "$T/cert.pem" 48 > "$T/hostile.log" 2>&1 ||
   fail "hostile checks: $(tail -5 "$T/hostile.log")"
-[ "$(grep -c "client 127.0.0.1 has 48 connections open" "$GW_LOG")" -eq 1 ] ||
-  fail "the refused connections were not logged exactly once: $(grep -c "connections open" "$GW_LOG")"
+[ "$(grep -c "client 127.0.0.1 has 48 connections open" "$GW_LOG")" -eq 0 ] ||
+  fail "idle connections at the address cap were refused instead of making room"
 pass "cross-site writes (403/415), rebinding (421), cross-site WebSocket (403), smuggling (400) refused;" \
-  "one address at its connection cap does not lock out another: $(grep -c '^ok:' "$T/hostile.log") checks"
+  "one address at its connection cap is not locked out, nor is another: $(grep -c '^ok:' "$T/hostile.log") checks"
 
 /usr/bin/python3 "$DIR/rest_client.py" https://127.0.0.1:8443 "$T/cert.pem" > "$T/rest.log" 2>&1 ||
   fail "REST checks: $(tail -5 "$T/rest.log")"
