@@ -229,6 +229,7 @@ DeviceModel DeviceModel::build(const Input& in) {
     Source s;
     s.type = e ? e->type : CoType::Domain;
     s.writable = e == nullptr || canopen::od::writable(e->access);
+    s.readable = e != nullptr && canopen::od::readable(e->access);
     metric.datatype = datatype_of(s.type);
     metric.object = ref;
     if (in.aliases) metric.alias = object_alias(in.network, in.node, index, sub);

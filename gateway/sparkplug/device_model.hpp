@@ -99,6 +99,7 @@ class DeviceModel {
     std::uint16_t rpdo = 0;   // the first RPDO mapping it (0: none): writes go out as that RPDO
     bool listed = false;      // in sparkplug-metrics: read by SDO for the birth
     bool writable = true;     // by SDO: not ro/const in the EDS
+    bool readable = false;    // by SDO: in the EDS and not wo (read for a DBIRTH while it has no value)
   };
 
   struct Input {

@@ -182,7 +182,7 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
 
   // A new bdSeq for every CONNECT attempt, stored before it is sent (facts A.5).
   void on_connecting() override {
-    auto params = edge.connect_params();
+    auto params = edge.connect_params(now_ms());
     if (!params.store_note.empty()) log.warn("sparkplug: " + params.store_note);
     session.set_will(std::move(params.will_topic), std::move(params.will_payload));
     closing = false;
@@ -221,7 +221,7 @@ struct EdgeClient::Impl : std::enable_shared_from_this<EdgeClient::Impl>, mqtt::
       log.warn("sparkplug: " + std::string(cmd->device.empty() ? "NCMD" : "DCMD for " + cmd->device) +
                ": unknown metrics or values that do not fit their type: " + names);
     }
-    if (owner && owner->on_command && !cmd->items.empty()) owner->on_command(std::move(*cmd));
+    if (owner && owner->on_command && (!cmd->items.empty() || cmd->rebirth)) owner->on_command(std::move(*cmd));
   }
 
   void on_rejected(std::uint64_t, std::uint8_t reason) override {

@@ -4,10 +4,17 @@
 #include <vector>
 
 namespace gateway::sparkplug {
+namespace {
+// SparkplugOutput reads a device's values again for a rebirth's DBIRTH.
+EdgeClientConfig with_owner_rebirths(EdgeClientConfig c) {
+  c.session.owner_reads_rebirths = true;
+  return c;
+}
+}  // namespace
 
 EdgeNode::EdgeNode(boost::asio::io_context& io, EdgeClientConfig client, SparkplugOutput::Options options,
                    core::RequestCore& core, const status::View& view, Logger& log)
-    : client_(std::make_unique<EdgeClient>(io, std::move(client), log)) {
+    : client_(std::make_unique<EdgeClient>(io, with_owner_rebirths(std::move(client)), log)) {
   std::vector<SparkplugOutput::Network> networks;
   for (std::uint32_t net = 1; net <= view.networks().size(); ++net) networks.push_back({net, view.configured_nodes(net)});
   SparkplugOutput::Sources sources;

@@ -58,27 +58,28 @@ std::string EdgeSession::device_topic(std::string_view type, std::string_view de
   return t;
 }
 
-std::string EdgeSession::ndeath_payload() const {
+std::string EdgeSession::ndeath_payload(std::uint64_t now) const {
   // NDEATH: only the bdSeq metric (Int64), no seq (spec ch6 payloads-ndeath-*).
+  // Stamped with `now` in the payload and the metric: hosts show a death
+  // at 0 as 1970 (issue 27 item 7).
   std::string p;
   Metric m;
   m.name = std::string(kBdSeq);
   m.datatype = DataType::Int64;
   m.value = std::uint64_t{bd_seq_.value_or(0)};
-  // The Will's timestamp is not meaningful (facts A.3); 0 keeps the
-  // payload the same whenever it is built.
-  append_header(p, 0);
+  m.timestamp = now;
+  append_header(p, now);
   append_metric(p, m, Form::Birth);
   return p;
 }
 
-EdgeSession::ConnectParams EdgeSession::connect_params() {
+EdgeSession::ConnectParams EdgeSession::connect_params(std::uint64_t now) {
   ConnectParams c;
   const auto next = store_.next();
   bd_seq_ = next.bd_seq;
   c.bd_seq = next.bd_seq;
   c.will_topic = node_topic("NDEATH");
-  c.will_payload = ndeath_payload();
+  c.will_payload = ndeath_payload(now);  // the Will: the connect time
   c.store_note = next.note;
   if (next.error) {
     if (!c.store_note.empty()) c.store_note += "; ";
@@ -110,7 +111,7 @@ void EdgeSession::connected(std::vector<Outgoing>& out, std::uint64_t now) {
   births(out, now);
 }
 
-void EdgeSession::births(std::vector<Outgoing>& out, std::uint64_t now) {
+void EdgeSession::births(std::vector<Outgoing>& out, std::uint64_t now, bool with_devices) {
   state_ = State::Born;
   last_rebirth_ = now;
   seq_ = 0;  // NBIRTH seq is 0, on rebirths too (spec ch4 topics-nbirth-seq-num)
@@ -127,8 +128,10 @@ void EdgeSession::births(std::vector<Outgoing>& out, std::uint64_t now) {
   for (const auto& m : node_metrics_) append_metric(p, m, Form::Birth);
   append_seq(p, take_seq());
   publish(out, node_topic("NBIRTH"), std::move(p));
-  for (auto& d : devices_)
-    if (d.online) dbirth(out, d, now);
+  for (auto& d : devices_) {
+    d.born = false;  // a new birth sequence: no DDATA before this one's DBIRTH
+    if (d.online && with_devices) dbirth(out, d, now);
+  }
 }
 
 void EdgeSession::dbirth(std::vector<Outgoing>& out, Device& d, std::uint64_t now) {
@@ -147,10 +150,10 @@ void EdgeSession::lost() {
   for (auto& d : devices_) d.born = false;
 }
 
-void EdgeSession::end_session(std::vector<Outgoing>& out, std::uint64_t /*now*/) {
+void EdgeSession::end_session(std::vector<Outgoing>& out, std::uint64_t now) {
   // NDEATH at QoS 1 like the Will; on 3.1.1 the DISCONNECT suppresses the
   // Will, so this is the only NDEATH hosts get (spec ch5 intentional-disconnect).
-  publish(out, node_topic("NDEATH"), ndeath_payload(), 1);
+  publish(out, node_topic("NDEATH"), ndeath_payload(now), 1);  // the stop time
   out.push_back({Outgoing::Kind::Disconnect, {}, {}, 0, false});
   state_ = State::Stopping;
   for (auto& d : devices_) d.born = false;
@@ -291,12 +294,16 @@ std::optional<WriteCommand> EdgeSession::handle_command(std::vector<Outgoing>& o
   // (device), same bdSeq (spec ch5 rebirth-action-1..3). Before the births
   // (waiting for the Primary Host) they come anyway.
   if (rebirth_asked && state_ == State::Born) {
+    const bool owner = opts_.owner_reads_rebirths;
     if (!device)
-      births(out, now);
-    else if (device->online)
+      births(out, now, !owner);
+    else if (device->online && !owner)
       dbirth(out, *device, now);
+    else if (owner)
+      device->born = false;  // no DDATA until the owner's DBIRTH
+    w.rebirth = owner;
   }
-  if (w.items.empty() && w.refused.empty()) return std::nullopt;
+  if (w.items.empty() && w.refused.empty() && !w.rebirth) return std::nullopt;
   return w;
 }
 

@@ -4,7 +4,7 @@
 // start, MQTT 3.1.1 or 5); the owner feeds it what happened and carries out
 // the Outgoing messages it appends, in order.
 //
-//   connect_params()            before every CONNECT attempt: the next bdSeq
+//   connect_params(now)         before every CONNECT attempt: the next bdSeq
 //                               (BdSeqStore, durable) and the Will (NDEATH,
 //                               QoS 1, not retained) to put in that CONNECT
 //   connected(out, now)         CONNACK accepted: SUBSCRIBEs (NCMD, DCMD,
@@ -89,6 +89,10 @@ struct WriteCommand {
   // Metrics that were unknown, or whose value did not fit their type (to be
   // logged; the spec has no command response).
   std::vector<std::string> refused;
+  // A Rebirth was asked (of `device`, or of the node: every device) and
+  // Options::owner_reads_rebirths is set: the owner reads the devices'
+  // values again and calls device_online() for each DBIRTH.
+  bool rebirth = false;
 };
 
 class EdgeSession {
@@ -98,6 +102,11 @@ class EdgeSession {
     std::string edge_node_id;  // E: the same
     // sparkplug.primary-host-id; "" = none (births right after CONNECT).
     std::string primary_host_id;
+    // An NCMD/DCMD Rebirth: the session sends the NBIRTH (node) and leaves
+    // the DBIRTHs to the owner, which reads the values again first and
+    // calls device_online() (WriteCommand::rebirth). false: the DBIRTHs go
+    // out at once with the values kept.
+    bool owner_reads_rebirths = false;
   };
   struct ConnectParams {
     std::uint8_t bd_seq = 0;
@@ -120,7 +129,8 @@ class EdgeSession {
   EdgeSession(Options opts, BdSeqStore& store);
 
   // --- the MQTT connection ------------------------------------------------
-  ConnectParams connect_params();
+  // `now`: ms since the epoch, the Will's (NDEATH's) timestamp.
+  ConnectParams connect_params(std::uint64_t now);
   void connected(std::vector<Outgoing>& out, std::uint64_t now);
   void lost();
   // Handles a PUBLISH on one of the subscribed topics. Returns the
@@ -173,9 +183,11 @@ class EdgeSession {
 
   std::string node_topic(std::string_view type) const;
   std::string device_topic(std::string_view type, std::string_view device) const;
-  void births(std::vector<Outgoing>& out, std::uint64_t now);
+  // NBIRTH, then every online device's DBIRTH unless with_devices is false
+  // (those devices are unborn until device_online()).
+  void births(std::vector<Outgoing>& out, std::uint64_t now, bool with_devices = true);
   void dbirth(std::vector<Outgoing>& out, Device& d, std::uint64_t now);
-  std::string ndeath_payload() const;
+  std::string ndeath_payload(std::uint64_t now) const;
   std::uint8_t take_seq();
   void publish(std::vector<Outgoing>& out, std::string topic, std::string payload, std::uint8_t qos = 0);
   void end_session(std::vector<Outgoing>& out, std::uint64_t now);

@@ -119,19 +119,21 @@ void field_fixed(S& s, std::uint32_t field, T v) {  // float, double: little-end
   s.bytes(&v, sizeof v);
 }
 
+// As Tahu Java and Ignition read them (contract, issue 27 items 5 and 6):
+// UInt32 goes in long_value (tahu issues 131 and 397: a UInt32 in
+// int_value reads as null there), the narrower types in int_value.
 bool in_int_value(DataType t) {
   return t == DataType::Int8 || t == DataType::Int16 || t == DataType::Int32 || t == DataType::UInt8 ||
-         t == DataType::UInt16 || t == DataType::UInt32;
+         t == DataType::UInt16;
 }
-// Int8/Int16 in int_value as the two's complement of their own width
-// (spec ch6 "Datatype Details"; Tahu adds 2^8 / 2^16 to negative values).
+// Signed values sign-extended to 32 bits, as Tahu's own encoders write
+// them (-1234 as Int16 is 0xFFFFFB2E; its own width, 0xFB2E, reads as 64302
+// in Tahu JS: spec issue 453, tahu issue 71); unsigned ones as they are.
 std::uint32_t int_value_of(DataType t, std::uint64_t bits) {
   switch (t) {
-    case DataType::Int8:
     case DataType::UInt8: return static_cast<std::uint32_t>(bits & 0xFFu);
-    case DataType::Int16:
     case DataType::UInt16: return static_cast<std::uint32_t>(bits & 0xFFFFu);
-    default: return static_cast<std::uint32_t>(bits);
+    default: return static_cast<std::uint32_t>(bits);  // the int64's low 32 bits: sign-extended
   }
 }
 

@@ -134,16 +134,35 @@ void SparkplugOutput::begin_birth(Device& d) {
   d.model = build(d);
   if (d.state) (void)d.model->on_state(*d.state, sources_.now_ms());
   d.phase = Device::Phase::Reading;
+  d.unheard_reads = 0;
   read_next(d, d.generation, 0);
 }
 
-// The sparkplug-metrics objects one after the other: one place of the
-// node's SDO queue at a time, whatever the list's length.
+// What the DBIRTH declares, read one after the other (one place of the
+// node's SDO queue at a time, whatever the list's length): first every
+// sparkplug-metrics object, again for every birth (contract: rebirths
+// too), then the other objects that have no value yet (a TPDO not heard
+// since, an RPDO output never written: issue 27 item 8), at most
+// kMaxUnheardReads of those per birth so a large mapping cannot hold the
+// birth for long. An object the EDS marks wo, or one without an EDS
+// entry, is not read; a value heard meanwhile is not read again.
+// `from` counts over both passes: n + k is the second pass's k.
 void SparkplugOutput::read_next(Device& d, std::uint64_t generation, std::size_t from) {
   const auto& sources = d.model->sources();
-  std::size_t i = from;
-  while (i < sources.size() && !sources[i].listed) ++i;
-  if (i == sources.size()) return finish_birth(d);
+  const auto& metrics = d.model->metrics();
+  const std::size_t n = sources.size();
+  const auto wanted = [&](std::size_t at) {
+    if (at < n) return sources[at].listed;
+    const std::size_t k = at - n;
+    return !sources[k].listed && sources[k].kind == sparkplug::DeviceModel::Kind::Object && sources[k].readable &&
+           std::holds_alternative<std::monostate>(metrics[k].value) && d.unheard_reads < kMaxUnheardReads;
+  };
+  std::size_t at = from;
+  while (at < 2 * n && !wanted(at)) ++at;
+  if (at == 2 * n) return finish_birth(d);
+  const std::size_t i = at < n ? at : at - n;
+  const bool listed = at < n;
+  if (!listed) ++d.unheard_reads;
   const sparkplug::ObjectRef ref = *d.model->metrics()[i].object;
   core::Request r;
   r.caller = sparkplug_caller("sparkplug:birth", Role::Viewer);
@@ -151,15 +170,24 @@ void SparkplugOutput::read_next(Device& d, std::uint64_t generation, std::size_t
   r.command = core::SdoRead{d.node, ref.index, ref.sub_index, std::nullopt};
   std::weak_ptr<bool> alive = alive_;
   Device* dp = &d;
-  execute_(std::move(r), [this, alive, dp, generation, ref, i](core::Result res) {
+  execute_(std::move(r), [this, alive, dp, generation, ref, at, listed](core::Result res) {
     if (alive.expired() || dp->generation != generation) return;  // gone, lost or born anew meanwhile
     if (const auto* v = std::get_if<core::SdoValue>(&res)) {
       (void)dp->model->on_value(ref, v->value, sources_.now_ms());
     } else if (const auto* p = std::get_if<core::Problem>(&res)) {
-      log_.warn(where(dp->network, dp->node) + ": reading " + core::object_label(ref.index, ref.sub_index) +
-                " for the DBIRTH failed (" + std::to_string(p->status) + " " + p->detail + "): it is null");
+      const std::string what = where(dp->network, dp->node) + ": reading " +
+                               core::object_label(ref.index, ref.sub_index) + " for the DBIRTH failed (" +
+                               std::to_string(p->status) + " " + p->detail + "): it is null";
+      if (listed) {
+        log_.warn(what);
+      } else {
+        log_.debug(what);
+        // No answer, or no bus: the other unheard objects would wait as
+        // long each; they stay null until their PDO is heard.
+        if (p->status == 504 || p->status == 503) dp->unheard_reads = kMaxUnheardReads;
+      }
     }
-    read_next(*dp, generation, i + 1);
+    read_next(*dp, generation, at + 1);
   });
 }
 
@@ -253,6 +281,13 @@ void SparkplugOutput::on_command(const sparkplug::WriteCommand& cmd) {
   for (const auto& r : cmd.refused)
     log_.warn("sparkplug: " + what + ": metric \"" + printable(r) +
               "\" refused (unknown, or the value does not fit its type)");
+  if (cmd.rebirth) {
+    // Every DBIRTH of a rebirth reads its values again (contract "Sparkplug
+    // B"; issue 27 item 9): the session sent the NBIRTH, the DBIRTHs follow
+    // each device's reads.
+    for (auto& d : devices_)
+      if (d.phase != Device::Phase::Offline && (cmd.device.empty() || d.id == cmd.device)) begin_birth(d);
+  }
   if (cmd.items.empty()) return;
   if (options_.commands_role == Role::None) {
     log_.info("sparkplug: " + what + ": ignored (sparkplug.commands-role is none)");

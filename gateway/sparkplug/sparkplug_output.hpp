@@ -111,6 +111,7 @@ class SparkplugOutput {
     enum class Phase : std::uint8_t { Offline, Reading, Online } phase = Phase::Offline;
     std::optional<sparkplug::DeviceModel> model;
     std::uint64_t generation = 0;  // +1 per birth started or loss: stale SDO answers are dropped
+    std::size_t unheard_reads = 0;  // objects without a value read for the birth under way
     std::optional<canopen::NmtState> state;
     std::vector<std::string> last_notes;  // logged once while they stay the same
   };
@@ -120,6 +121,8 @@ class SparkplugOutput {
   Device& device(std::uint32_t network, std::uint8_t node);  // creates one for a node not configured
   sparkplug::DeviceModel build(Device& d);
   void begin_birth(Device& d);
+  // Objects without a value read for one DBIRTH, besides sparkplug-metrics.
+  static constexpr std::size_t kMaxUnheardReads = 64;
   void read_next(Device& d, std::uint64_t generation, std::size_t from);
   void finish_birth(Device& d);
   void data(Device& d, const std::vector<sparkplug::Update>& updates, std::uint64_t now);

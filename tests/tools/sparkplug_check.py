@@ -48,10 +48,12 @@ DEFAULT_PROTO = os.path.normpath(os.path.join(HERE, "..", "..", "proto", "sparkp
 INT8, INT16, INT32, INT64, UINT8, UINT16, UINT32, UINT64 = 1, 2, 3, 4, 5, 6, 7, 8
 FLOAT, DOUBLE, BOOLEAN, STRING, DATETIME, TEXT, UUID = 9, 10, 11, 12, 13, 14, 15
 DATASET, BYTES, FILE, TEMPLATE = 16, 17, 18, 19
-# The value field each datatype travels in (facts A.7 "Wire mapping", arrays in bytes_value).
+# The value field each datatype travels in (facts A.7 "Wire mapping", arrays
+# in bytes_value), as Tahu Java and Ignition read them (contract: UInt32 in
+# long_value, tahu issues 131 and 397).
 VALUE_FIELD = {
     INT8: "int_value", INT16: "int_value", INT32: "int_value",
-    UINT8: "int_value", UINT16: "int_value", UINT32: "int_value",
+    UINT8: "int_value", UINT16: "int_value", UINT32: "long_value",
     INT64: "long_value", UINT64: "long_value", DATETIME: "long_value",
     FLOAT: "float_value", DOUBLE: "double_value", BOOLEAN: "boolean_value",
     STRING: "string_value", TEXT: "string_value", UUID: "string_value",
@@ -467,6 +469,14 @@ class Checker:
             self.violation("value-type", topic, "%s: datatype %d travels in %s, not %s" % (label, datatype, want, field))
         elif datatype in (UINT8, UINT16) and m.int_value >= 1 << WIDTH[datatype]:
             self.violation("value-type", topic, "%s: %d does not fit datatype %d" % (label, m.int_value, datatype))
+        elif datatype in (INT8, INT16) and (1 << (WIDTH[datatype] - 1)) <= m.int_value < (1 << 32) - (1 << (WIDTH[datatype] - 1)):
+            # Contract: negative Int8/Int16 sign-extended to 32 bits (Tahu
+            # Java); the two's complement of their own width reads as a
+            # large positive number in Tahu JS.
+            self.violation("value-type", topic, "%s: %d is not an Int%d sign-extended to 32 bits"
+                           % (label, m.int_value, WIDTH[datatype]))
+        elif datatype == UINT32 and m.long_value >= 1 << 32:
+            self.violation("value-type", topic, "%s: %d does not fit datatype %d" % (label, m.long_value, datatype))
 
     def check_properties(self, topic, m):
         """Checks a device metric's properties; returns its (index, subIndex) if it has them."""

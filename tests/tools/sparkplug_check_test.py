@@ -95,7 +95,7 @@ class Builder:
 
     def dbirth(self, device, **kw):
         p = self.payload()
-        self.metric(p, "Speed", INT16, (-5) & 0xFFFF, index=(0x6000, 1), alias=self.alias())
+        self.metric(p, "Speed", INT16, (-5) & 0xFFFFFFFF, index=(0x6000, 1), alias=self.alias())
         self.metric(p, "Setpoint", UINT32, 7, index=(0x6200, 0), alias=self.alias())
         self.metric(p, "Serial", STRING, None, index=(0x1018, 4), alias=self.alias())
         self.metric(p, "Node/State", STRING, "operational", alias=self.alias())
@@ -105,7 +105,7 @@ class Builder:
 
     def ddata(self, device, value, alias=None, **kw):
         p = self.payload()
-        self.metric(p, "Speed", INT16, value & 0xFFFF, birth=False, alias=alias)
+        self.metric(p, "Speed", INT16, value & 0xFFFFFFFF, birth=False, alias=alias)
         return self.add("DDATA", p, device, **kw)
 
     def ndata(self, **kw):
@@ -503,6 +503,28 @@ class CheckerTest(unittest.TestCase):
         p = b.payload()
         m = b.metric(p, "Speed", INT16, 1, birth=False)
         m.long_value = 1  # Int16 travels in int_value
+        b.add("DDATA", p, "pump")
+        self.assert_flagged(b.lines, "value-type")
+
+    def test_int16_in_its_own_width_contract(self):
+        # Contract: negative Int8/Int16 go sign-extended to 32 bits (Tahu
+        # Java, Ignition); -5 as 0xFFFB reads as 65531 in Tahu JS.
+        b = Builder(self.pb)
+        b.nbirth(0)
+        b.dbirth("pump")
+        p = b.payload()
+        b.metric(p, "Speed", INT16, (-5) & 0xFFFF, birth=False)
+        b.add("DDATA", p, "pump")
+        self.assert_flagged(b.lines, "value-type")
+
+    def test_uint32_in_int_value_contract(self):
+        # Contract: UInt32 travels in long_value (tahu issues 131 and 397).
+        b = Builder(self.pb)
+        b.nbirth(0)
+        b.dbirth("pump")
+        p = b.payload()
+        m = b.metric(p, "Setpoint", UINT32, 7, birth=False)
+        m.int_value = 7
         b.add("DDATA", p, "pump")
         self.assert_flagged(b.lines, "value-type")
 

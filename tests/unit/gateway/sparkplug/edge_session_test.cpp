@@ -47,7 +47,7 @@ struct Rig {
 
   // CONNECT + CONNACK; returns the CONNECT's parameters.
   EdgeSession::ConnectParams connect(std::uint64_t now = kT0) {
-    auto c = session.connect_params();
+    auto c = session.connect_params(now);
     session.connected(out, now);
     return c;
   }
@@ -85,10 +85,11 @@ std::string state_json(bool online, std::uint64_t ts) {
 }
 
 // Facts A.4.2 / spec ch5 will-message-*: the Will is NDEATH on
-// spBv1.0/G/NDEATH/E, QoS 1, not retained, with only bdSeq (Int64) and no seq.
+// spBv1.0/G/NDEATH/E, QoS 1, not retained, with only bdSeq (Int64) and no
+// seq; stamped with the connect time (issue 27 item 7: 0 shows as 1970).
 TEST(EdgeSession, TheWillIsNdeathWithTheConnectsBdSeq) {
   Rig r;
-  const auto c = r.session.connect_params();
+  const auto c = r.session.connect_params(kT0);
   EXPECT_EQ(c.will_topic, "spBv1.0/plant1/NDEATH/gw1");
   EXPECT_EQ(c.will_qos, 1);
   EXPECT_FALSE(c.will_retain);
@@ -99,6 +100,8 @@ TEST(EdgeSession, TheWillIsNdeathWithTheConnectsBdSeq) {
   EXPECT_EQ(p.metrics(0).datatype(), static_cast<unsigned>(pb::Int64));
   EXPECT_EQ(bdseq_of(p), 0);
   EXPECT_FALSE(p.has_seq()) << "NDEATH must not include seq (spec ch6 payloads-ndeath-seq)";
+  EXPECT_EQ(p.timestamp(), kT0) << "the connect time, not 0";
+  EXPECT_EQ(p.metrics(0).timestamp(), kT0);
 }
 
 // Facts A.4.3/A.4.4, contract: subscribe NCMD (and DCMD) at QoS 1 first,
@@ -306,6 +309,35 @@ TEST(EdgeSession, DcmdDeviceRebirthSendsThatDbirth) {
   EXPECT_EQ(parse(out[0].payload).seq(), 3U);
 }
 
+// Issue 27 item 9: with owner_reads_rebirths, a rebirth's DBIRTHs are the
+// owner's (it reads the values again first): NCMD gives the NBIRTH alone,
+// no DDATA of a device until its DBIRTH, and the command says rebirth.
+TEST(EdgeSession, WithOwnerReadsRebirthsTheOwnerSendsTheDbirths) {
+  BdSeqStore store{std::filesystem::path{}};
+  EdgeSession session({"plant1", "gw1", "", true}, store);  // as sparkplug::EdgeNode runs it
+  std::vector<Outgoing> out;
+  session.device_online(out, "d1", drive_metrics(), kT0);
+  (void)session.connect_params(kT0);
+  session.connected(out, kT0);
+  out.clear();
+  pb::Payload p;
+  auto* m = p.add_metrics();
+  m->set_name("Node Control/Rebirth");
+  m->set_boolean_value(true);
+  const auto cmd = session.received(out, "spBv1.0/plant1/NCMD/gw1", p.SerializeAsString(), kT0 + 1);
+  ASSERT_TRUE(cmd);
+  EXPECT_TRUE(cmd->rebirth);
+  EXPECT_TRUE(cmd->device.empty());
+  EXPECT_EQ(topics(out), std::vector<std::string>{"spBv1.0/plant1/NBIRTH/gw1"});
+  out.clear();
+  const Update u[] = {{0, std::uint64_t{1}, kT0 + 2}};
+  session.device_data(out, "d1", u, kT0 + 2);
+  EXPECT_TRUE(out.empty()) << "no DDATA before its DBIRTH";
+  session.device_online(out, "d1", drive_metrics(), kT0 + 3);
+  ASSERT_EQ(topics(out), std::vector<std::string>{"spBv1.0/plant1/DBIRTH/gw1/d1"});
+  EXPECT_EQ(parse(out[0].payload).seq(), 1U) << "right after the NBIRTH";
+}
+
 // Commands other than rebirth go to the owner, resolved to the device's
 // metric (by name or alias) and typed; unknown or ill-typed ones are listed
 // as refused and change nothing here.
@@ -377,8 +409,11 @@ TEST(EdgeSession, CleanStopPublishesNdeathBeforeDisconnect) {
   ASSERT_EQ(topics(out), (std::vector<std::string>{"spBv1.0/plant1/NDEATH/gw1", "DISCONNECT"}));
   EXPECT_EQ(out[0].qos, 1);
   EXPECT_FALSE(out[0].retain);
-  EXPECT_EQ(out[0].payload, c.will_payload);
-  EXPECT_FALSE(parse(out[0].payload).has_seq());
+  const auto ndeath = parse(out[0].payload);
+  EXPECT_EQ(bdseq_of(ndeath), bdseq_of(parse(c.will_payload))) << "the Will's bdSeq";
+  EXPECT_FALSE(ndeath.has_seq());
+  EXPECT_EQ(ndeath.timestamp(), kT0 + 1) << "the stop time (issue 27 item 7)";
+  EXPECT_EQ(ndeath.metrics(0).timestamp(), kT0 + 1);
   r.session.stop(r.out, kT0 + 2);
   EXPECT_TRUE(r.take().empty()) << "once";
 }

@@ -120,8 +120,10 @@ TEST(SparkplugPayload, DataMetricWithoutAliasCarriesTheName) {
   EXPECT_FALSE(p.metrics(0).has_alias());
 }
 
-// Spec ch6 "Datatype Details": Int8..Int32 and UInt8..UInt32 in int_value
-// (signed ones as two's complement of their width), Int64/UInt64/DateTime
+// Spec ch6 "Datatype Details", as Tahu Java and Ignition read it (contract,
+// issue 27 items 5 and 6): Int8..Int32, UInt8 and UInt16 in int_value, the
+// signed ones sign-extended to 32 bits (-1234 as Int16 is 0xFFFFFB2E, not
+// 0xFB2E, which Tahu JS reads as 64302); UInt32, Int64, UInt64 and DateTime
 // in long_value; a null value is is_null with no value.
 TEST(SparkplugPayload, ValuesGoInTheFieldTheirDatatypeNames) {
   struct Case {
@@ -130,7 +132,7 @@ TEST(SparkplugPayload, ValuesGoInTheFieldTheirDatatypeNames) {
   };
   const Case cases[] = {
       {DataType::Int8, std::int64_t{-1}},
-      {DataType::Int16, std::int64_t{-2}},
+      {DataType::Int16, std::int64_t{-1234}},
       {DataType::Int32, std::int64_t{-3}},
       {DataType::Int64, std::int64_t{-4}},
       {DataType::UInt32, std::uint64_t{0xFFFFFFFF}},
@@ -153,11 +155,13 @@ TEST(SparkplugPayload, ValuesGoInTheFieldTheirDatatypeNames) {
   }
   const auto p = parse(out);
   ASSERT_EQ(p.metrics_size(), static_cast<int>(std::size(cases)));
-  EXPECT_EQ(p.metrics(0).int_value(), 0xFFU);
-  EXPECT_EQ(p.metrics(1).int_value(), 0xFFFEU);
+  EXPECT_EQ(p.metrics(0).int_value(), 0xFFFFFFFFU);
+  EXPECT_EQ(p.metrics(1).int_value(), 0xFFFFFB2EU);
+  EXPECT_EQ(static_cast<std::int32_t>(p.metrics(1).int_value()), -1234) << "as Tahu Java reads it";
   EXPECT_EQ(p.metrics(2).int_value(), 0xFFFFFFFDU);
   EXPECT_EQ(p.metrics(3).long_value(), static_cast<std::uint64_t>(-4));
-  EXPECT_EQ(p.metrics(4).int_value(), 0xFFFFFFFFU);
+  EXPECT_EQ(p.metrics(4).value_case(), sparkplug_test::pb::Payload::Metric::kLongValue);
+  EXPECT_EQ(p.metrics(4).long_value(), 0xFFFFFFFFU);
   EXPECT_EQ(p.metrics(5).long_value(), std::numeric_limits<std::uint64_t>::max());
   EXPECT_EQ(p.metrics(6).long_value(), 1'767'225'600'000U);
   EXPECT_EQ(p.metrics(7).float_value(), 1.5f);
@@ -209,6 +213,27 @@ TEST(SparkplugPayload, TypedValueChecksTheRangeOfTheMetricsType) {
   EXPECT_EQ(typed_value(true, DataType::Int32), std::nullopt);
   EXPECT_EQ(typed_value(1.0, DataType::Float), std::nullopt);
   EXPECT_EQ(typed_value(1.0f, DataType::Float), Value{1.0f});
+}
+
+// Issue 27 items 5 and 6: a DCMD is accepted in either form hosts write:
+// Int16 -1234 in its own width (Tahu JS, Python) or sign-extended (Tahu
+// Java), a UInt32 in int_value (older hosts) or long_value (Tahu, Ignition).
+TEST(SparkplugPayload, CommandsAreAcceptedInEitherFormHostsWrite) {
+  sparkplug_test::pb::Payload p;
+  p.set_timestamp(5);
+  p.add_metrics()->set_int_value(0xFB2E);
+  p.add_metrics()->set_int_value(0xFFFFFB2E);
+  p.add_metrics()->set_int_value(0xDEADBEEF);
+  p.add_metrics()->set_long_value(0xDEADBEEF);
+  p.add_metrics()->set_long_value(0x1'0000'0000);
+  const auto cmd = decode_command(p.SerializeAsString());
+  ASSERT_TRUE(cmd);
+  ASSERT_EQ(cmd->metrics.size(), 5U);
+  EXPECT_EQ(typed_value(cmd->metrics[0].value, DataType::Int16), Value{std::int64_t{-1234}});
+  EXPECT_EQ(typed_value(cmd->metrics[1].value, DataType::Int16), Value{std::int64_t{-1234}});
+  EXPECT_EQ(typed_value(cmd->metrics[2].value, DataType::UInt32), Value{std::uint64_t{0xDEADBEEF}});
+  EXPECT_EQ(typed_value(cmd->metrics[3].value, DataType::UInt32), Value{std::uint64_t{0xDEADBEEF}});
+  EXPECT_EQ(typed_value(cmd->metrics[4].value, DataType::UInt32), std::nullopt) << "too wide: refused, not truncated";
 }
 
 }  // namespace

@@ -217,7 +217,7 @@ struct Rig {
   explicit Rig(Role commands_role = Role::Operator, bool real_core = false)
       : desc(canopen::eds::parse_device_description(kEds, "io.eds", kNode)),
         store(""),
-        session({"plant", "gw", ""}, store),
+        session({"plant", "gw", "", true}, store),  // the DBIRTHs of a rebirth are ours, as in EdgeNode
         log(LogLevel::Info, mlog.file),
         fake_nets(kEds, kNode),
         real(fake_nets, tokens, {}, [this](const std::string& line) { audit.push_back(line); }) {
@@ -238,6 +238,16 @@ struct Rig {
       exec = [this](core::Request r, core::RequestCore::Done d) { real.execute(std::move(r), std::move(d)); };
     } else {
       exec = [this](core::Request r, core::RequestCore::Done d) {
+        // The birth's reads of objects without a value (issue 27 item 8)
+        // get no answer unless a test answers them itself: the others
+        // are then not read and the requests are those of the listed
+        // objects and the test's own.
+        const auto* read = std::get_if<core::SdoRead>(&r.command);
+        if (read != nullptr && read->index != 0x2200 && read->index != 0x2300 && !answer_unheard) {
+          unheard.push_back(*read);
+          d(core::Problem{504, "SDO timeout", {}, {}, 0x05040000, 0, true, {}});
+          return;
+        }
         fake.requests.push_back(std::move(r));
         fake.done.push_back(std::move(d));
       };
@@ -247,7 +257,7 @@ struct Rig {
         exec, std::vector<SparkplugOutput::Network>{{1, {node}}}, src, SparkplugOutput::Options{false, commands_role},
         log);
     output->start();
-    session.connect_params();
+    session.connect_params(now);
     session.connected(sent, now);
   }
 
@@ -285,6 +295,23 @@ struct Rig {
     ASSERT_TRUE(cmd);
     output->on_command(*cmd);
   }
+  // NCMD Node Control/Rebirth (device "") or DCMD Device Control/Rebirth.
+  void rebirth(std::string_view device) {
+    pb::Payload p;
+    p.set_timestamp(now);
+    auto* m = p.add_metrics();
+    m->set_name(device.empty() ? "Node Control/Rebirth" : "Device Control/Rebirth");
+    m->set_datatype(pb::Boolean);
+    m->set_boolean_value(true);
+    std::vector<sparkplug::Outgoing> out;
+    auto cmd = session.received(
+        out, device.empty() ? std::string("spBv1.0/plant/NCMD/gw") : "spBv1.0/plant/DCMD/gw/" + std::string(device),
+        p.SerializeAsString(), now);
+    sent.insert(sent.end(), out.begin(), out.end());
+    ASSERT_TRUE(cmd);
+    EXPECT_TRUE(cmd->rebirth);
+    output->on_command(*cmd);
+  }
   // A DCMD with several metrics (UInt8 values).
   void dcmd_u8(const std::vector<std::pair<std::string, std::uint32_t>>& items) {
     pb::Payload p;
@@ -314,6 +341,8 @@ struct Rig {
   }
 
   std::uint64_t now = kT0;
+  bool answer_unheard = false;         // true: those reads wait in `fake` like the others
+  std::vector<core::SdoRead> unheard;  // the reads answered with a time-out
   canopen::eds::DeviceDescription desc;
   canopen::pdo::RemotePdoTable pdos;
   sparkplug::BdSeqStore store;
@@ -384,7 +413,7 @@ TEST(SparkplugOutput, BootUpGivesADbirthWithPdoAndListedMetrics) {
   const auto* speed = metric(p, "Speed");
   ASSERT_NE(speed, nullptr);
   EXPECT_EQ(speed->int_value(), 42u);
-  EXPECT_EQ(metric(p, "Serial")->int_value(), 7u);
+  EXPECT_EQ(metric(p, "Serial")->long_value(), 7u) << "UInt32 in long_value (contract, issue 27 item 6)";
   EXPECT_EQ(metric(p, "Node/State")->string_value(), "initialising");
   EXPECT_TRUE(metric(p, "EMCY/Error Code")->is_null());
   ASSERT_NE(metric(p, "Device Control/Rebirth"), nullptr);
@@ -663,6 +692,15 @@ TEST(SparkplugOutput, TheRealCoreAppliesRoleAndAudit) {
     ASSERT_EQ(rig.fake_nets.pending.size(), 1u) << "the read of 2200h reached the bus";
     rig.fake_nets.answer(canopen::Bytes{42, 0});
     rig.fake_nets.answer(canopen::Bytes{7, 0, 0, 0});
+    // Then the objects without a value, one at a time (issue 27 item 8);
+    // an abort leaves one null and the next is read.
+    std::size_t unheard = 0;
+    while (!rig.fake_nets.pending.empty() && unheard < 100) {
+      ASSERT_EQ(rig.fake_nets.pending.size(), 1u);
+      rig.fake_nets.answer({}, make_error_code(canopen::SdoAbort::NoSuchObject));
+      ++unheard;
+    }
+    EXPECT_GT(unheard, 0u);
     ASSERT_EQ(rig.published("DBIRTH").size(), 1u);
     EXPECT_EQ(one(rig.published("DBIRTH")[0]->payload, "Speed").int_value(), 42u);
     rig.dcmd("Speed", pb::UInt16, 300);
@@ -682,6 +720,94 @@ TEST(SparkplugOutput, TheRealCoreAppliesRoleAndAudit) {
       EXPECT_NE(rig.audit.back().find("sparkplug:dcmd"), std::string::npos) << rig.audit.back();
     }
   }
+}
+
+// Issue 27 item 8 (contract "Sparkplug B"): the DBIRTH declares values, not
+// nulls: after the sparkplug-metrics objects, the PDO-mapped objects that
+// have no value yet are read by SDO (a TPDO not heard since, an RPDO
+// output), one at a time; one heard meanwhile is not read again.
+TEST(SparkplugOutput, TheDbirthReadsTheObjectsItDeclaresWithoutAValue) {
+  Rig rig;
+  rig.answer_unheard = true;
+  rig.boot_up();
+  rig.answer_reads();
+  EXPECT_TRUE(rig.published("DBIRTH").empty()) << "not before those reads";
+  const auto read_of = [&](std::size_t i) { return std::get_if<core::SdoRead>(&rig.fake.requests.at(i).command); };
+  ASSERT_EQ(rig.fake.requests.size(), 3u) << "one read at a time";
+  ASSERT_NE(read_of(2), nullptr);
+  EXPECT_EQ(std::pair(read_of(2)->index, read_of(2)->sub), std::pair(std::uint16_t{0x6000}, std::uint8_t{1}));
+  EXPECT_EQ(rig.fake.requests[2].caller.role, Role::Viewer);
+  // Temperature's TPDO arrives meanwhile: it is not read.
+  rig.event(canopen::PdoEvent{kNode, 1, 0x185, {}, {{0x2001, 0, "Temperature", canopen::Value::of_signed(CT::Integer16, -1234)}}, {}, {}},
+            kT0 + 7);
+  rig.fake.answer(2, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned8, 9)});
+  ASSERT_EQ(rig.fake.requests.size(), 4u);
+  EXPECT_EQ(std::pair(read_of(3)->index, read_of(3)->sub), std::pair(std::uint16_t{0x6200}, std::uint8_t{1}))
+      << "the RPDO outputs after the TPDO inputs; 2001h was heard";
+  rig.fake.answer(3, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned8, 3)});
+  ASSERT_EQ(rig.fake.requests.size(), 5u);
+  EXPECT_EQ(std::pair(read_of(4)->index, read_of(4)->sub), std::pair(std::uint16_t{0x6200}, std::uint8_t{2}));
+  rig.fake.answer(4, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned8, 4)});
+  EXPECT_EQ(rig.fake.requests.size(), 5u) << "nothing else without a value";
+  const auto dbirth = rig.published("DBIRTH");
+  ASSERT_EQ(dbirth.size(), 1u);
+  const auto p = parse(dbirth[0]->payload);
+  EXPECT_EQ(metric(p, "Read inputs/Input 1")->int_value(), 9u);
+  EXPECT_EQ(static_cast<std::int32_t>(metric(p, "Temperature")->int_value()), -1234) << "sign-extended (item 5)";
+  EXPECT_EQ(metric(p, "Write outputs/Output 1")->int_value(), 3u);
+  EXPECT_EQ(metric(p, "Write outputs/Output 2")->int_value(), 4u);
+  for (const auto& m : p.metrics()) {
+    if (m.properties().keys_size() > 0) {
+      EXPECT_FALSE(m.is_null()) << m.name();
+    }
+  }
+}
+
+// A device that does not answer holds its birth for one SDO time-out, not
+// one per object: after an unanswered read the others stay null until heard.
+TEST(SparkplugOutput, AnUnansweredReadEndsTheReadsOfObjectsWithoutAValue) {
+  Rig rig;
+  rig.boot_up();
+  rig.answer_reads();
+  EXPECT_EQ(rig.unheard.size(), 1u);
+  const auto dbirth = rig.published("DBIRTH");
+  ASSERT_EQ(dbirth.size(), 1u);
+  EXPECT_TRUE(one(dbirth[0]->payload, "Read inputs/Input 1").is_null());
+  EXPECT_EQ(rig.logged().find("reading 6000h sub 1 for the DBIRTH failed"), std::string::npos)
+      << "not worth a warning: the value comes with its TPDO";
+}
+
+// Issue 27 item 9 (contract "Sparkplug B"): a rebirth (DCMD Device
+// Control/Rebirth, NCMD Node Control/Rebirth) reads the sparkplug-metrics
+// objects again for its DBIRTH instead of repeating the values of the last.
+TEST(SparkplugOutput, ARebirthReadsTheListedObjectsAgain) {
+  Rig rig;
+  rig.boot_up();
+  rig.answer_reads();
+  ASSERT_EQ(rig.published("DBIRTH").size(), 1u);
+  rig.rebirth("io");
+  EXPECT_EQ(rig.published("DBIRTH").size(), 1u) << "not before the reads";
+  ASSERT_EQ(rig.fake.requests.size(), 3u);
+  rig.fake.answer(2, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned16, 43)});
+  ASSERT_EQ(rig.fake.requests.size(), 4u);
+  rig.fake.answer(3, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned32, 8)});
+  auto dbirth = rig.published("DBIRTH");
+  ASSERT_EQ(dbirth.size(), 2u);
+  EXPECT_EQ(one(dbirth[1]->payload, "Speed").int_value(), 43u) << "read again";
+  EXPECT_EQ(one(dbirth[1]->payload, "Serial").long_value(), 8u);
+
+  const auto nbirths = rig.published("NBIRTH").size();
+  rig.rebirth("");
+  EXPECT_EQ(rig.published("NBIRTH").size(), nbirths + 1) << "the NBIRTH at once";
+  EXPECT_EQ(rig.published("DBIRTH").size(), 2u) << "the DBIRTH after its reads";
+  ASSERT_EQ(rig.fake.requests.size(), 5u);
+  rig.fake.answer(4, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned16, 44)});
+  rig.fake.answer(5, core::SdoValue{canopen::Value::of_unsigned(CT::Unsigned32, 8)});
+  dbirth = rig.published("DBIRTH");
+  ASSERT_EQ(dbirth.size(), 3u);
+  EXPECT_EQ(one(dbirth[2]->payload, "Speed").int_value(), 44u);
+  EXPECT_EQ(parse(dbirth[2]->payload).seq(), parse(rig.published("NBIRTH").back()->payload).seq() + 1u)
+      << "right after the NBIRTH: no DDATA between";
 }
 
 }  // namespace
