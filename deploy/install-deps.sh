@@ -16,6 +16,7 @@ PACKAGES=(
   libyaml-cpp-dev libssl-dev openssl
   # broker and CAN tools for tests and the demo
   mosquitto mosquitto-clients can-utils iproute2 python3 python3-can python3-paho-mqtt
+  rabbitmq-server  # a second broker, MQTT 3.1.1 only (tests/host/test_mqtt_brokers.sh)
   python3-protobuf  # tests/tools/sparkplug_check.py decodes Sparkplug payloads with code protoc generates
   # SocketCAN without host kernel support: user-mode Linux ships vcan & co.
   user-mode-linux kmod

@@ -128,6 +128,8 @@ void parse_node(const At& a, NodeConfig& n, const std::string& dir);
 void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id, const std::string& dir);
 // mqtt_yaml.cpp
 void parse_tls_files(const At& t, mqtt::MqttConfig& m, const std::string& dir);
+// `mqtt-version`: "5" (with the fallback to 3.1.1) or "3.1.1".
+void parse_mqtt_version(const At& v, mqtt::MqttConfig& m);
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir);
 // mqtt.qos and mqtt.queue.storage, the per-kind maps (after parse_mqtt()
 // checked they are maps); `file` as given to parse_config().

@@ -26,9 +26,16 @@ void parse_tls_files(const At& t, mqtt::MqttConfig& m, const std::string& dir) {
   if (m.cert_file.empty() != m.key_file.empty()) t.fail("cert and key go together");
 }
 
+void parse_mqtt_version(const At& v, mqtt::MqttConfig& m) {
+  const auto s = v.str();
+  if (s == "5") m.mqtt_version = 5;
+  else if (s == "3.1.1") m.mqtt_version = 4;
+  else v.fail("'" + s + "' is not 5 (falls back to 3.1.1 when the broker refuses it) or 3.1.1");
+}
+
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   a.expect_map({"uri", "client-id", "username", "password", "password-file", "tls", "format", "qos", "heartbeat",
-                "heartbeat-min-interval-ms", "queue", "requests-role", "reply-topics"});
+                "heartbeat-min-interval-ms", "queue", "requests-role", "reply-topics", "mqtt-version"});
   auto uri = a.get("uri");
   if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
   m.server_uri = uri->str();
@@ -43,6 +50,7 @@ void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
     std::getline(in, m.password);
   }
   if (auto t = a.get("tls")) parse_tls_files(*t, m, dir);
+  if (auto v = a.get("mqtt-version")) parse_mqtt_version(*v, m);
   if (auto v = a.get("format")) {
     const auto f = v->str();
     if (f == "json") m.format = PayloadFormat::Json;

@@ -45,12 +45,7 @@ void parse_sparkplug(const At& a, SparkplugConfig& sp, const std::string& dir) {
     std::getline(in, m.password);
   }
   if (auto t = a.get("tls")) parse_tls_files(*t, m, dir);
-  if (auto v = a.get("mqtt-version")) {
-    const auto s = v->str();
-    if (s == "5") m.mqtt_version = 5;
-    else if (s == "3.1.1") m.mqtt_version = 4;
-    else v->fail("'" + s + "' is not 5 (falls back to 3.1.1 when the broker refuses it) or 3.1.1");
-  }
+  if (auto v = a.get("mqtt-version")) parse_mqtt_version(*v, m);
   if (auto v = a.get("keepalive-s")) m.keepalive = std::chrono::seconds(v->integer(1, 65535));
 }
 

@@ -211,11 +211,17 @@ void Client::on_refused(std::uint8_t code, bool fell_back) {
 
 // The connection failed before or after CONNACK, or the broker closed it
 // (the session has forgotten what was in flight).
-void Client::on_lost(const std::string& why, bool was_up) {
+void Client::on_lost(const std::string& why, bool was_up, bool fell_back) {
   drop_connection();
   if (!was_up) {
     went_down(Down::Failed, why);
     if (!running_) return;
+    if (fell_back) {
+      log_.warn(prefix_ + "broker " + uri_ + " closed the connection without a CONNACK to an MQTT 5 CONNECT (" + why +
+                "): trying MQTT 3.1.1");
+      connect();
+      return;
+    }
     if (failures_ == 0 || log_.enabled(LogLevel::Debug))
       log_.warn(prefix_ + "connect to " + uri_ + " failed: " + why + ", retrying");
     schedule_retry();

@@ -167,7 +167,7 @@ class Client : private SessionEvents {
   void on_publish(const codec::Publish& p) override { events_.on_publish(p); }
   void on_subscribe_refused(std::uint8_t code) override { events_.on_subscribe_refused(code); }
   void on_batch_end(bool acked) override { events_.on_batch_end(acked); }
-  void on_lost(const std::string& why, bool was_up) override;
+  void on_lost(const std::string& why, bool was_up, bool fell_back) override;
   void on_deadline_changed() override;
 
   boost::asio::io_context& io_;

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 namespace gateway::mqtt {
@@ -90,6 +91,34 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
   bool draining = false;     // inside drain(): on_drained must not re-enter it
   OutboundQueue::Item item;  // reused by drain()
   Counters counters;
+  // The latest retained message per topic (status of buses, node states):
+  // a broker restarted without persistence has lost them, so each one the
+  // broker had is published again on every new connection (issue 27 item
+  // 3). One still queued is sent from the queue, in order, instead.
+  struct Retained {
+    std::string payload;
+    std::uint8_t qos = 0;
+    StorageMode mode = StorageMode::Memory;
+    std::uint64_t seq = 0;   // its place in the queue while not delivered
+    bool delivered = false;  // acked (QoS 1) or written (QoS 0)
+  };
+  std::unordered_map<std::string, Retained> retained_topics;
+  std::unordered_map<std::uint64_t, std::string> retained_in_queue;  // seq -> topic
+
+  // Queues the latest retained messages the broker had had once more.
+  void republish_retained() {
+    std::size_t n = 0;
+    for (auto& [topic, r] : retained_topics) {
+      if (!r.delivered) continue;
+      const std::uint64_t seq = queue.push(topic, r.payload, r.qos, true, r.mode);
+      if (seq == 0) continue;  // dropped by the queue (counted there)
+      r.seq = seq;
+      r.delivered = false;
+      retained_in_queue.emplace(seq, topic);
+      ++n;
+    }
+    if (n > 0) log.info("mqtt: publishing the " + std::to_string(n) + " retained topics again on the new connection");
+  }
 
   std::string status_topic() const { return gateway::status_topic(cfg.gateway_id); }
 
@@ -173,6 +202,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
              (limits.receive_maximum > 0 ? ", receive maximum " + std::to_string(limits.receive_maximum)
                                          : std::string()));
     queue.set_online(true);
+    republish_retained();
     // The online status before the backlog, then the request subscriptions.
     send_control(status_topic(), cfg.online_payload, true, nullptr);
     if (cfg.accept_requests) {
@@ -201,11 +231,21 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
 
   void on_acked(std::uint64_t seq) override {
     if (queue.ack(seq)) ++counters.acked;
+    if (!retained_in_queue.empty()) delivered(seq);
+  }
+
+  void delivered(std::uint64_t seq) {
+    const auto it = retained_in_queue.find(seq);
+    if (it == retained_in_queue.end()) return;
+    if (auto r = retained_topics.find(it->second); r != retained_topics.end() && r->second.seq == seq)
+      r->second.delivered = true;
+    retained_in_queue.erase(it);
   }
 
   void on_rejected(std::uint64_t seq, std::uint8_t reason) override {
     ++counters.rejected;
     queue.ack(seq);
+    retained_in_queue.erase(seq);  // not delivered: not published again
     log.warn("mqtt: broker refused a message, reason " + std::to_string(reason));
   }
 
@@ -308,9 +348,31 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     if (!queue.disk().storage_error()) (void)queue.disk().flush();
   }
 
+  void keep_retained(std::string_view topic, std::string_view payload, std::uint8_t qos, StorageMode mode,
+                     std::uint64_t seq) {
+    std::string t(topic);
+    const auto old = retained_topics.find(t);
+    // At most one place in the queue per topic is followed (one dropped by
+    // the queue is never acked).
+    if (old != retained_topics.end() && !old->second.delivered) retained_in_queue.erase(old->second.seq);
+    if (payload.empty()) {  // deletes the broker's retained message: nothing to publish again
+      if (old != retained_topics.end()) retained_topics.erase(old);
+      return;
+    }
+    Retained& r = old != retained_topics.end() ? old->second : retained_topics[t];
+    r.payload.assign(payload);
+    r.qos = qos;
+    r.mode = mode;
+    r.seq = seq;
+    r.delivered = false;
+    retained_in_queue.emplace(seq, std::move(t));
+  }
+
   void publish(std::string_view topic, std::string_view payload, std::uint8_t qos, bool retained, StorageMode mode) {
     ++counters.published;
-    if (queue.push(topic, payload, qos, retained, mode) == 0) return;  // dropped: counted by the queue
+    const std::uint64_t seq = queue.push(topic, payload, qos, retained, mode);
+    if (seq == 0) return;  // dropped: counted by the queue
+    if (retained) keep_retained(topic, payload, qos, mode, seq);
     schedule_pump();
   }
 

@@ -105,7 +105,7 @@ std::size_t Session::wrote(canopen::TimePoint now) {
 
 void Session::transport_closed(const std::string& why) {
   if (state_ == State::Idle) return;
-  lost(why);
+  lost(why, state_ == State::AwaitConnack);
 }
 
 void Session::on_timer(std::string& out, canopen::TimePoint now) {
@@ -138,10 +138,23 @@ void Session::close() {
   set_deadline(std::nullopt);
 }
 
-void Session::lost(const std::string& why) {
+void Session::lost(const std::string& why, bool closed_awaiting_connack) {
   const bool was_up = state_ == State::Up;
+  bool fall_back = false;
+  if (!was_up && opts_.mqtt_version >= 5) {
+    if (version_ == codec::kMqtt5 && closed_awaiting_connack) {
+      // RabbitMQ's MQTT plugin (3.1.1 only) closes at an MQTT 5 CONNECT.
+      version_ = codec::kMqtt311;
+      fell_back_ = fall_back = true;
+    } else if (version_ == codec::kMqtt311 && fell_back_) {
+      // The 3.1.1 attempt failed as well: the broker was maybe restarting
+      // rather than refusing 5; the next attempt is 5 again.
+      version_ = codec::kMqtt5;
+      fell_back_ = false;
+    }
+  }
   close();
-  ev_.on_lost(why, was_up);
+  ev_.on_lost(why, was_up, fall_back);
 }
 
 void Session::handle(std::string& out, const codec::Packet& p, canopen::TimePoint now) {
@@ -211,7 +224,8 @@ void Session::handle_connack(const codec::Packet& p, canopen::TimePoint now) {
     // The broker refuses MQTT 5: v5 reason 0x84, or a 3.1.1 broker's
     // CONNACK code 1 (unacceptable protocol version).
     const bool fall_back = version_ == codec::kMqtt5 && opts_.mqtt_version >= 5 && (ca.code == 0x84 || ca.code == 1);
-    if (fall_back) version_ = codec::kMqtt311;
+    if (fall_back) version_ = codec::kMqtt311;  // refused 5 in so many words: no going back
+    fell_back_ = false;
     close();
     ev_.on_refused(ca.code, fall_back);
     return;

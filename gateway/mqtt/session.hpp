@@ -19,7 +19,8 @@
 // Maximum less kReceiveMaximumReserve for status and replies), each
 // identified by the owner's token (a queue id) until its PUBACK. It handles
 // CONNACK (the fallback from MQTT 5 to 3.1.1 when the broker refuses 5:
-// reason 0x84 or the 3.1.1 code 1), the broker's limits (Maximum QoS caps
+// reason 0x84 or the 3.1.1 code 1, or closes the connection without a
+// CONNACK; back to 5 when that 3.1.1 attempt fails too), the broker's limits (Maximum QoS caps
 // QoS 1, Retain Available 0 clears retain, Maximum Packet Size refuses a
 // PUBLISH larger than it, Server Keep Alive replaces the keepalive),
 // keepalive (a PINGREQ every half keepalive when the link has been quiet in
@@ -86,8 +87,11 @@ class SessionEvents {
   virtual void on_batch_end(bool acked) = 0;
   // The connection is over (timeout, protocol error, broker's DISCONNECT,
   // transport closed); was_up: after an accepted CONNACK. The owner closes
-  // the transport; what was in flight is on resend_list().
-  virtual void on_lost(const std::string& why, bool was_up) = 0;
+  // the transport; what was in flight is on resend_list(). fell_back: the
+  // broker closed the connection without a CONNACK to an MQTT 5 CONNECT
+  // (as 3.1.1-only brokers do), so the next open() is 3.1.1: connect again
+  // at once.
+  virtual void on_lost(const std::string& why, bool was_up, bool fell_back) = 0;
   // deadline() changed: re-arm the timer (or cancel it when none).
   virtual void on_deadline_changed() = 0;
 };
@@ -195,7 +199,8 @@ class Session {
   void handle(std::string& out, const codec::Packet& p, canopen::TimePoint now);
   void handle_connack(const codec::Packet& p, canopen::TimePoint now);
   void on_puback(std::uint16_t pid, std::uint8_t reason);
-  void lost(const std::string& why);
+  // closed_awaiting_connack: the transport closed before any CONNACK.
+  void lost(const std::string& why, bool closed_awaiting_connack = false);
   void set_deadline(std::optional<canopen::TimePoint> d);
   void forget_window(bool control_too);
   bool take_resend(std::uint64_t token);
@@ -208,6 +213,7 @@ class Session {
   SessionEvents& ev_;
   State state_ = State::Idle;
   std::uint8_t version_;
+  bool fell_back_ = false;  // version_ is 3.1.1 by a fallback, not by the options
   BrokerLimits limits_;
   std::string connect_packet_;
   codec::Decoder decoder_;

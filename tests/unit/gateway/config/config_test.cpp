@@ -786,6 +786,15 @@ TEST(Config, MqttUriOriginIsTheFlagOrTheKey) {
   EXPECT_EQ(merge(parse_config("mqtt:\n  uri: tcp://b:1883\n", "gw.yaml"), cli).mqtt.uri_origin, "--mqtt tcp://c:1883");
 }
 
+// Issue 27 item 1 (contract "Brokers"): the native session has
+// mqtt.mqtt-version as Sparkplug has sparkplug.mqtt-version.
+TEST(Config, MqttVersionIsFiveOr311) {
+  EXPECT_EQ(parse_config("mqtt: {uri: tcp://b:1883}\n", "gw.yaml").mqtt.mqtt_version, 5);
+  EXPECT_EQ(parse_config("mqtt: {uri: tcp://b:1883, mqtt-version: 3.1.1}\n", "gw.yaml").mqtt.mqtt_version, 4);
+  EXPECT_EQ(parse_config("mqtt: {uri: tcp://b:1883, mqtt-version: 5}\n", "gw.yaml").mqtt.mqtt_version, 5);
+  EXPECT_THAT(config_error("mqtt: {uri: tcp://b:1883, mqtt-version: 3}\n"), HasSubstr("mqtt.mqtt-version: '3' is not 5"));
+}
+
 // A control character in the file is not echoed raw into the one-line
 // error (it could end the line or drive the terminal): it reads \xNN.
 TEST(Config, ControlCharactersInMessagesAreEscaped) {

@@ -363,7 +363,10 @@ inline int listen_on_loopback(int& port) {
 // version" (0x84) and is closed; anything else is relayed to the broker.
 class V311OnlyProxy {
  public:
-  explicit V311OnlyProxy(int broker_port) : broker_port_(broker_port) {
+  // How it refuses an MQTT 5 CONNECT: CONNACK 0x84, or closing the
+  // connection without a CONNACK (as RabbitMQ's MQTT plugin does).
+  enum class Refusal { Connack, Close };
+  explicit V311OnlyProxy(int broker_port, Refusal how = Refusal::Connack) : broker_port_(broker_port), how_(how) {
     listen_fd_ = listen_on_loopback(port_);
     acceptor_ = std::thread([this] { accept_loop(); });
   }
@@ -412,7 +415,7 @@ class V311OnlyProxy {
     if (buf[at + 4] == 5) {
       ++refused_;
       const char connack[] = {0x20, 0x03, 0x00, static_cast<char>(0x84), 0x00};
-      (void)!::write(c, connack, sizeof connack);
+      if (how_ == Refusal::Connack) (void)!::write(c, connack, sizeof connack);
       ::close(c);
       return;
     }
@@ -443,6 +446,7 @@ class V311OnlyProxy {
   }
 
   int broker_port_;
+  Refusal how_;
   int listen_fd_ = -1;
   int port_ = 0;
   std::atomic<bool> stop_{false};

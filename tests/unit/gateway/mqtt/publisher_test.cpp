@@ -657,6 +657,60 @@ TEST_F(MqttPublisherTest, FallsBackTo311WhenBrokerRefuses5) {
   io_.call([&] { pub_.reset(); });  // before the proxy goes
 }
 
+// Issue 27 item 1 (contract "Brokers"): a broker that closes the
+// connection at an MQTT 5 CONNECT without a CONNACK (RabbitMQ's MQTT
+// plugin) is tried again with 3.1.1 at once, and the log says so.
+TEST_F(MqttPublisherTest, FallsBackTo311WhenTheBrokerClosesAtMqtt5) {
+  start_broker();
+  V311OnlyProxy proxy(broker_->port(), V311OnlyProxy::Refusal::Close);
+  Subscriber sub(broker_->uri(), "fallback-close-sub", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(sub.connect());
+  auto c = config();
+  c.server_uri = "tcp://127.0.0.1:" + std::to_string(proxy.port());
+  c.reconnect_min = 10s;  // "at once": not after the backoff
+  start_publisher(c, &captured_log_);
+  EXPECT_EQ(counters().mqtt_version, 4);
+  EXPECT_EQ(proxy.refused_v5(), 1);
+  publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", "{}", false));
+  ASSERT_TRUE(sub.wait_topic("canopen/gw1/1/5/emcy", 10s));
+  const auto text = captured_.text();
+  EXPECT_NE(text.find("without a CONNACK to an MQTT 5 CONNECT"), std::string::npos) << text;
+  io_.call([&] { pub_.reset(); });  // before the proxy goes
+}
+
+// Issue 27 item 3 (contract "Brokers"): a broker restarted without
+// persistence has lost the retained topics (status, bus, node states);
+// they are published again on the new connection, each its latest value.
+TEST_F(MqttPublisherTest, RetainedTopicsArePublishedAgainOnANewConnection) {
+  start_broker(false);
+  start_publisher(config());
+  publish(make_event(EventKind::Bus, "canopen/gw1/1/bus", "error-passive", true));
+  publish(make_event(EventKind::State, "canopen/gw1/1/5/state", "pre-operational", true));
+  publish(make_event(EventKind::State, "canopen/gw1/1/5/state", "operational", true));
+  publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", "not retained", false));
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0; }, 10s));
+
+  broker_->stop();  // no persistence: the retained messages are gone
+  ASSERT_TRUE(eventually([&] { return !counters().connected; }, 10s));
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+  ASSERT_TRUE(eventually([&] { return counters().connected; }, 20s));
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0; }, 10s));
+
+  // A client that comes afterwards gets them from the broker.
+  Subscriber late(broker_->uri(), "late-sub", {"canopen/gw1/#"}, {});
+  ASSERT_TRUE(late.connect());
+  ASSERT_TRUE(late.wait_topic("canopen/gw1/1/5/state", 10s));
+  ASSERT_TRUE(late.wait_topic("canopen/gw1/1/bus", 10s));
+  std::this_thread::sleep_for(300ms);
+  const auto state = late.on_topic("canopen/gw1/1/5/state");
+  ASSERT_EQ(state.size(), 1u);
+  EXPECT_EQ(state[0]->get_payload_str(), "operational") << "the latest value";
+  EXPECT_TRUE(state[0]->is_retained());
+  EXPECT_EQ(late.on_topic("canopen/gw1/1/bus").at(0)->get_payload_str(), "error-passive");
+  EXPECT_TRUE(late.on_topic("canopen/gw1/1/5/emcy").empty()) << "only retained topics";
+  EXPECT_FALSE(late.on_topic("canopen/gw1/status").empty()) << "the status too";
+}
+
 // Batching: every PUBLISH ready in one io loop turn goes to the socket in
 // one write (QoS 0: the messages leave the queue once written).
 TEST_F(MqttPublisherTest, OneWriteCarriesEveryPublishOfALoopTurn) {

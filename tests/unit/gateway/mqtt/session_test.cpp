@@ -26,6 +26,7 @@ struct Recorder : SessionEvents {
   std::vector<std::pair<std::uint64_t, int>> rejected;
   std::vector<std::string> incoming;  // topics
   std::vector<std::pair<std::string, bool>> lost;
+  std::vector<bool> lost_fell_back;
   int deadline_changes = 0;
   int batches = 0;
   void on_connected(const BrokerLimits& l) override { connected.push_back(l); }
@@ -35,7 +36,10 @@ struct Recorder : SessionEvents {
   void on_publish(const codec::Publish& p) override { incoming.emplace_back(p.topic); }
   void on_subscribe_refused(std::uint8_t) override {}
   void on_batch_end(bool) override { ++batches; }
-  void on_lost(const std::string& why, bool was_up) override { lost.emplace_back(why, was_up); }
+  void on_lost(const std::string& why, bool was_up, bool fell_back) override {
+    lost.emplace_back(why, was_up);
+    lost_fell_back.push_back(fell_back);
+  }
   void on_deadline_changed() override { ++deadline_changes; }
 };
 
@@ -289,6 +293,52 @@ TEST_F(SessionTest, FallsBackTo311WhenTheBrokerRefuses5) {
   s->transport_connected(out, clock.now());
   s->received(out, bytes({0x20, 0x02, 0x00, 0x01}), clock.now());
   EXPECT_EQ(ev.refused.at(0), std::make_pair(1, false));
+}
+
+// Issue 27 item 1 (contract "Brokers"): a broker that closes the
+// connection without a CONNACK to an MQTT 5 CONNECT (RabbitMQ's MQTT
+// plugin) gets 3.1.1 next, at once; if that fails as well (a broker that
+// was only restarting), the attempt after it is 5 again. Closes before the
+// transport was up, or after a CONNACK, change nothing; neither does one
+// when configured for 3.1.1 only.
+TEST_F(SessionTest, FallsBackTo311WhenTheBrokerClosesWithoutAConnack) {
+  make(options());
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_connected(out, clock.now());
+  s->transport_closed("connection closed by the broker");
+  ASSERT_EQ(ev.lost_fell_back, std::vector<bool>{true});
+  EXPECT_FALSE(ev.lost.at(0).second);
+  EXPECT_EQ(s->version(), codec::kMqtt311);
+  out.clear();
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_connected(out, clock.now());
+  EXPECT_EQ(packets(out).at(0).body[6], 4) << "protocol level 3.1.1";
+  s->received(out, bytes({0x20, 0x02, 0x00, 0x00}), clock.now());
+  ASSERT_EQ(ev.connected.size(), 1u);
+  EXPECT_EQ(ev.connected[0].version, codec::kMqtt311);
+  s->transport_closed("reset");
+  EXPECT_EQ(ev.lost_fell_back.back(), false) << "after a CONNACK: a lost connection, not a refusal of 5";
+  EXPECT_EQ(s->version(), codec::kMqtt311) << "the broker took 3.1.1: kept";
+
+  // The 3.1.1 attempt fails too: 5 again for the next.
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_closed("connection refused");  // before the transport was up
+  EXPECT_EQ(s->version(), codec::kMqtt5);
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_closed("connection refused");
+  EXPECT_EQ(ev.lost_fell_back.back(), false) << "no CONNECT reached the broker";
+  EXPECT_EQ(s->version(), codec::kMqtt5);
+
+  // 3.1.1 only: a close is just a close.
+  ev = Recorder{};
+  auto o = options();
+  o.mqtt_version = 4;
+  make(o);
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_connected(out, clock.now());
+  s->transport_closed("connection closed by the broker");
+  EXPECT_EQ(ev.lost_fell_back, std::vector<bool>{false});
+  EXPECT_EQ(s->version(), codec::kMqtt311);
 }
 
 TEST_F(SessionTest, WindowFillsAndPubacksRefillIt) {
