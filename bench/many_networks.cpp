@@ -171,8 +171,12 @@ int main(int argc, char** argv) {
   gateway::EventPipeline pipeline(
       [&ctx](std::uint32_t net, const canopen::Event& ev) { return gateway::encode_event(ev, net, ctx); }, cache);
   bool publish = false;  // off while the devices' own cost is measured
+  std::uint64_t published_bytes = 0;  // the JSON payloads handed to the publisher
   pipeline.add_consumer([&](const gateway::EncodedEventPtr& ev) {
-    if (publish) publisher.publish(ev);
+    if (publish) {
+      published_bytes += ev->json.size();
+      publisher.publish(ev);
+    }
   });
 
   std::vector<std::unique_ptr<Bus>> buses;
@@ -252,11 +256,18 @@ int main(int argc, char** argv) {
                   : 0.0);
   const auto& q = publisher.queue_counters();
   const auto& t = publisher.tier_counters();
-  std::printf("queue: spilled to disk %llu, dropped queue_full %llu, memory_full %llu, storage_full %llu\n",
+  std::printf("queue: spilled to disk %llu, dropped queue_full %llu, memory_full %llu, storage_full %llu, "
+              "backpressure %llu\n",
               static_cast<unsigned long long>(t.spilled + t.to_disk),
               static_cast<unsigned long long>(q.dropped_qos0 + q.dropped_qos1 + q.dropped_span),
               static_cast<unsigned long long>(t.dropped_memory),
-              static_cast<unsigned long long>(q.dropped_full + t.dropped_spill));
+              static_cast<unsigned long long>(q.dropped_full + t.dropped_spill),
+              static_cast<unsigned long long>(t.dropped_backpressure));
+  // Issue 27 item 4: storage writes per payload byte published (<= 0.1).
+  const std::uint64_t payload_bytes = published_bytes;
+  std::printf("storage: %llu bytes written for %llu payload bytes published (%.4f per byte)\n",
+              static_cast<unsigned long long>(q.storage_bytes), static_cast<unsigned long long>(payload_bytes),
+              payload_bytes > 0 ? static_cast<double>(q.storage_bytes) / static_cast<double>(payload_bytes) : 0.0);
   std::printf("achieved: %.0f frames/s in all (%.0f per bus)\n", frames / all.wall, frames / all.wall / n);
   std::printf("simulated devices alone: %.3f us CPU per frame (subtracted)\n", sim_cpu_per_frame * 1e6);
   std::printf("gateway CPU per frame: %.3f us\n", gw_cpu / frames * 1e6);
@@ -266,7 +277,10 @@ int main(int argc, char** argv) {
               gw_cpu / all.wall, gw_cpu / all.wall * 100,
               gw_cpu / all.wall < 1.0 ? "fits on one core" : "does NOT fit on one core");
   std::printf("whole process incl. simulated devices: %.3f CPU s per wall s\n", (all.cpu + cpu_tail) / all.wall);
-  const bool ok = c.dropped == base.dropped && events == all.frames;
+  // Messages dropped under backpressure (a broker slower than the buses,
+  // QoS 0: the oldest go instead of flash writes) are the intended answer,
+  // not a failure; any other drop is.
+  const bool ok = c.dropped - base.dropped == t.dropped_backpressure && events == all.frames;
   if (!ok) std::printf("WARNING: events (%llu) != frames or messages dropped\n", static_cast<unsigned long long>(events));
   return ok ? 0 : 1;
 }

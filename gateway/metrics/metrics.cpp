@@ -351,7 +351,9 @@ void register_mqtt(Registry& r, std::function<MqttMetrics()> read) {
                {}, field(&MqttMetrics::requests_refused));
   r.collect("canopen_gateway_mqtt_dropped_total",
             "MQTT messages dropped, by reason: queue_full (max-bytes/max-messages), too_big, storage_full (the "
-            "state-dir file system is full or failing), memory_full (memory tier), rejected (by the broker).",
+            "state-dir file system is full or failing), memory_full (memory tier), backpressure (QoS 0 outage "
+            "messages, the oldest first, while a connected broker was slower than the buses: never stored), "
+            "rejected (by the broker).",
             MetricType::Counter, [read](const Registry::Emit& emit) {
               for (const auto& [reason, n] : read().dropped_by_reason) emit({{"reason", reason}}, n);
             });

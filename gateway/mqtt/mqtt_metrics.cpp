@@ -28,6 +28,7 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, std::uint64_t re
                          {"too_big", q.dropped_too_big},
                          {"storage_full", q.dropped_full + t.dropped_spill},
                          {"memory_full", t.dropped_memory},
+                         {"backpressure", t.dropped_backpressure},
                          {"rejected", c.rejected}};
   return m;
 }

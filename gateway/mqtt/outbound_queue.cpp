@@ -39,12 +39,11 @@ void OutboundQueue::pop_done() {
   counters_.memory_bytes = mem_bytes_;
 }
 
-// Every Outage message in memory goes to the DiskQueue, oldest first.
-void OutboundQueue::spill() {
+void OutboundQueue::spill(bool qos1_only) {
   if (mem_outage_ == 0) return;
   for (std::size_t i = 0; i < mem_.size() && mem_outage_ > 0; ++i) {
     MemEntry& e = mem_[i];
-    if (!e.live || e.mode != StorageMode::Outage) continue;
+    if (!e.live || e.mode != StorageMode::Outage || (qos1_only && e.msg.qos == 0)) continue;
     const std::uint64_t id = mem_base_ + i;
     const std::uint64_t seq = disk_.push(e.msg.topic, e.msg.payload, e.msg.qos, e.msg.retained, false);
     if (seq == 0) {
@@ -63,10 +62,25 @@ void OutboundQueue::spill() {
 }
 
 // Room in the memory tier for a message of `bytes` (see the header).
-bool OutboundQueue::make_room(std::uint64_t bytes, StorageMode mode) {
+bool OutboundQueue::make_room(std::uint64_t bytes, StorageMode mode, std::uint8_t qos) {
   if (bytes > opts_.memory_max_bytes) return false;
   auto full = [&] { return mem_live_ + 1 > opts_.memory_max_messages || mem_bytes_ + bytes > opts_.memory_max_bytes; };
-  if (full()) spill();
+  if (!full()) return true;
+  if (mode == StorageMode::Outage && qos == 0 && online_) {
+    // Backpressure while connected: never storage for QoS 0; the oldest
+    // unsent QoS 0 Outage messages go (those handed out are as good as
+    // written). Per topic the newest stays, and order is kept.
+    for (std::uint64_t id = std::max(mem_cursor_, mem_base_); full() && id - mem_base_ < mem_.size(); ++id) {
+      MemEntry& e = mem_[static_cast<std::size_t>(id - mem_base_)];
+      if (!e.live || e.mode != StorageMode::Outage || e.msg.qos != 0) continue;
+      retire(e);
+      ++counters_.dropped_backpressure;
+    }
+    if (full()) spill(true);  // QoS 1 ones may make the room
+    pop_done();
+    return !full();
+  }
+  spill(online_);  // online: only QoS 1 ones may touch storage
   if (mode != StorageMode::Memory) return !full();
   for (std::size_t i = 0; full() && i < mem_.size(); ++i) {
     if (!mem_[i].live) continue;
@@ -81,9 +95,13 @@ std::uint64_t OutboundQueue::push(std::string_view topic, std::string_view paylo
                                   StorageMode mode) {
   if (mode == StorageMode::Disk) return disk_.push(topic, payload, qos, retained, true);
   const std::uint64_t bytes = topic.size() + payload.size();
-  if ((mode == StorageMode::Outage && !online_) || !make_room(bytes, mode)) {
+  if ((mode == StorageMode::Outage && !online_) || !make_room(bytes, mode, qos)) {
     if (mode == StorageMode::Memory) {
       ++counters_.dropped_memory;  // larger than the whole tier
+      return 0;
+    }
+    if (qos == 0 && online_) {
+      ++counters_.dropped_backpressure;  // no room without storage
       return 0;
     }
     ++counters_.to_disk;

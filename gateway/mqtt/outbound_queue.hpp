@@ -6,8 +6,13 @@
 //   Disk    written to the DiskQueue (durable: fdatasync'ed by sync()).
 //           Survives kill -9 and, up to the sync interval, a power loss.
 //   Outage  in memory while online(); written to the DiskQueue (not
-//           durable: never fdatasync'ed on its own) while offline, and when
-//           the memory tier is full (the broker does not keep up). Going
+//           durable: never fdatasync'ed on its own) while offline. When
+//           the memory tier is full while online (the broker or the link
+//           is slower than the buses), QoS 0 ones never go to storage (the
+//           flash wear of issue 27 item 4): the oldest unsent QoS 0 Outage
+//           messages are dropped for the new one (dropped_backpressure; a
+//           dashboard wants the latest TPDO, not a backlog); QoS 1 ones
+//           spill to the DiskQueue as before. Going
 //           offline (set_online(false)) moves every Outage message still in
 //           memory to the DiskQueue, in order ("spill"), so a broker outage
 //           and a restart lose nothing within the DiskQueue's bounds.
@@ -25,8 +30,11 @@
 // and the disk copy is handed out again only after a rewind().
 //
 // Memory tier full (memory_max_messages or memory_max_bytes over messages
-// not yet acked): first all Outage messages in it spill to the DiskQueue;
-// a new Outage message that still does not fit goes to the DiskQueue; a
+// not yet acked): a new QoS 0 Outage message, while online, first drops
+// the oldest unsent QoS 0 Outage messages, and is dropped itself if that
+// makes no room; otherwise all QoS 1 Outage messages in memory spill to the
+// DiskQueue (every Outage one when offline); a new Outage QoS 1 message
+// that still does not fit goes to the DiskQueue; a
 // new Memory message makes room by dropping the oldest Memory messages
 // (counted in dropped_memory), or is dropped itself if it alone is larger
 // than the tier.
@@ -68,6 +76,7 @@ class OutboundQueue {
     std::uint64_t to_disk = 0;         // Outage messages written to the DiskQueue at push (offline or tier full)
     std::uint64_t dropped_memory = 0;  // Memory messages dropped: the tier was full
     std::uint64_t dropped_spill = 0;   // Outage messages the DiskQueue refused (full disk)
+    std::uint64_t dropped_backpressure = 0;  // QoS 0 Outage messages dropped online: the tier was full
   };
   using Item = DiskQueue::Item;  // Item::seq is the id
 
@@ -97,7 +106,8 @@ class OutboundQueue {
   const Counters& counters() const { return counters_; }
   // Drops across both tiers (DiskQueue drops included).
   std::uint64_t dropped() const {
-    return disk_.counters().dropped() + counters_.dropped_memory + counters_.dropped_spill;
+    return disk_.counters().dropped() + counters_.dropped_memory + counters_.dropped_spill +
+           counters_.dropped_backpressure;
   }
 
  private:
@@ -109,8 +119,10 @@ class OutboundQueue {
   };
   static std::uint64_t cost(const MemEntry& e) { return e.msg.topic.size() + e.msg.payload.size(); }
   MemEntry* mem_entry(std::uint64_t id);
-  bool make_room(std::uint64_t bytes, StorageMode mode);
-  void spill();
+  bool make_room(std::uint64_t bytes, StorageMode mode, std::uint8_t qos);
+  // Every Outage message in memory to the DiskQueue (only the QoS 1 ones
+  // with qos1_only), oldest first.
+  void spill(bool qos1_only = false);
   void retire(MemEntry& e);
   void pop_done();
 

@@ -145,6 +145,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
       else
         self->queue.disk().flush(true);
       self->check_storage();
+      self->check_backpressure();
       self->check_stall();
       self->arm_sync();
     });
@@ -165,6 +166,29 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
                " messages dropped meanwhile");
     }
     storage_error = now;
+  }
+
+  // QoS 0 messages dropped under backpressure (OutboundQueue): logged once
+  // when an episode begins and once when it has been over for 10 s.
+  std::uint64_t backpressure_seen = 0, backpressure_at_start = 0;
+  std::optional<std::chrono::steady_clock::time_point> backpressure_since;  // last drop of the episode
+  void check_backpressure() {
+    const std::uint64_t n = queue.counters().dropped_backpressure;
+    const auto now = std::chrono::steady_clock::now();
+    if (n != backpressure_seen) {
+      if (!backpressure_since) {
+        backpressure_at_start = backpressure_seen;
+        log.warn("mqtt: the broker takes messages slower than the buses produce them: dropping the oldest QoS 0 "
+                 "messages in memory, never writing them to storage (canopen_gateway_mqtt_dropped_total"
+                 "{reason=\"backpressure\"})");
+      }
+      backpressure_seen = n;
+      backpressure_since = now;
+    } else if (backpressure_since && now - *backpressure_since > std::chrono::seconds(10)) {
+      log.info("mqtt: the broker keeps up again; " + std::to_string(n - backpressure_at_start) +
+               " QoS 0 messages were dropped meanwhile");
+      backpressure_since.reset();
+    }
   }
 
   void check_stall() {

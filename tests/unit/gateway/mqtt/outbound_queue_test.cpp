@@ -112,23 +112,54 @@ TEST(OutboundQueue, SpillOnDisconnectKeepsOrderAndLosesNothing) {
   EXPECT_EQ(q.depth(), 0u);
 }
 
-// The memory tier fills while online (the broker does not keep up): its
-// `outage` messages move to disk, those in flight too, without being sent
-// twice: their acks (by the ids handed out) ack the disk copies.
-TEST(OutboundQueue, FullMemoryTierSpillsWithoutDuplicates) {
+// Issue 27 item 4 (contract "Brokers", QoS 0 and storage): with the broker
+// connected but slower than the buses, QoS 0 `outage` messages never touch
+// storage: the oldest unsent ones make room for the newest (counted), the
+// ones handed out stay; order is kept; only once offline do they spill.
+TEST(OutboundQueue, FullMemoryTierWhileConnectedDropsTheOldestQos0NeverStoresThem) {
   TempDir d;
   auto o = opts(d);
   o.memory_max_messages = 10;
   OutboundQueue q(o);
   q.set_online(true);
   for (int i = 0; i < 10; ++i) push(q, "tpdo", i, StorageMode::Outage);
+  OutboundQueue::Item it;
+  for (int i = 0; i < 2; ++i) ASSERT_TRUE(q.next(it));  // 0, 1 handed out (in the socket)
+  for (int i = 10; i < 1000; ++i) EXPECT_NE(push(q, "tpdo", i, StorageMode::Outage), 0u) << i;
+  EXPECT_EQ(q.disk().depth(), 0u);
+  EXPECT_EQ(q.disk().counters().storage_bytes, 0u) << "not a byte written";
+  EXPECT_EQ(q.counters().spilled + q.counters().to_disk, 0u);
+  EXPECT_EQ(q.counters().dropped_backpressure, 990u);
+  EXPECT_EQ(q.dropped(), 990u);
+  // What is left: the two handed out (acked as written), then the newest.
+  EXPECT_EQ(drain(q, false), seq("tpdo", 992, 1000));
+  // A QoS 1 kind beside it still spills when the tier is full.
+  push(q, "emcy", 0, StorageMode::Outage, 1);
+  EXPECT_GE(q.disk().depth() + q.counters().memory_depth, 1u);
+  // Offline: what is in memory spills, as before.
+  q.rewind();
+  q.set_online(false);
+  EXPECT_EQ(q.counters().memory_depth, 0u);
+  EXPECT_GT(q.counters().spilled, 0u);
+}
+
+// The memory tier fills while online (the broker does not keep up): its
+// QoS 1 `outage` messages move to disk, those in flight too, without being
+// sent twice: their acks (by the ids handed out) ack the disk copies.
+TEST(OutboundQueue, FullMemoryTierSpillsQos1WithoutDuplicates) {
+  TempDir d;
+  auto o = opts(d);
+  o.memory_max_messages = 10;
+  OutboundQueue q(o);
+  q.set_online(true);
+  for (int i = 0; i < 10; ++i) push(q, "tpdo", i, StorageMode::Outage, 1);
   std::vector<std::uint64_t> in_flight;
   OutboundQueue::Item it;
   for (int i = 0; i < 4; ++i) {
     ASSERT_TRUE(q.next(it));
     in_flight.push_back(it.seq);
   }
-  for (int i = 10; i < 15; ++i) push(q, "tpdo", i, StorageMode::Outage);  // full: everything spills
+  for (int i = 10; i < 15; ++i) push(q, "tpdo", i, StorageMode::Outage, 1);  // full: everything spills
   EXPECT_EQ(q.counters().spilled, 10u);
   EXPECT_EQ(q.counters().memory_depth, 5u);  // 10..14: room again after the spill
   EXPECT_EQ(drain(q, false), seq("tpdo", 4, 15));  // 0..3 are in flight: not again
