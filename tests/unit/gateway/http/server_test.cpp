@@ -738,7 +738,7 @@ TEST(HttpServer, AtAnAddressCapItsLongestIdleConnectionMakesRoom) {
     newcomers.push_back(std::make_unique<HttpClient>(ts.port()));
     EXPECT_EQ(newcomers.back()->get("/x").result_int(), 200u) << "not locked out: " << i;
   }
-  for (int i = 0; i < 2; ++i) {
+  for (std::size_t i = 0; i < 2; ++i) {
     held[i]->get("/x");
     EXPECT_TRUE(held[i]->ec) << "the longest idle connections of that address were closed: " << i;
   }
