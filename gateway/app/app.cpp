@@ -16,6 +16,7 @@
 #include "core/format.hpp"
 #include "messages/event_encoder.hpp"
 #include "app/mqtt_output.hpp"
+#include "mqtt/client.hpp"
 #include "app/node_configs.hpp"
 #include "pipeline/stack_output.hpp"
 #include "pipeline/pipeline_metrics.hpp"
@@ -264,6 +265,20 @@ void App::add_output(std::unique_ptr<StackOutput> output) {
 
 std::optional<status::SparkplugStatus> App::sparkplug_status() const {
   return sparkplug_status_ ? sparkplug_status_() : std::nullopt;
+}
+
+std::optional<status::MqttStatus> App::mqtt_status() const {
+  if (!mqtt_) return std::nullopt;
+  status::MqttStatus s;
+  for (const auto& u : config_.mqtt.uris()) s.brokers.push_back(mqtt::normalize_server_uri(u));
+  if (const auto* p = mqtt_->publisher()) {
+    const auto c = p->counters();
+    s.connected = c.connected;
+    s.broker = c.broker;
+    s.mqtt_version = c.mqtt_version;
+    s.reconnects = c.reconnects;
+  }
+  return s;
 }
 
 std::vector<NodeConfig> App::configured_nodes(std::uint32_t net_number) const {

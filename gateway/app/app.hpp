@@ -178,6 +178,8 @@ class App {
   // The Sparkplug B edge node's session (GET /api/v1/gateway) as the
   // function set_sparkplug_status() was given reads it; nullopt without one.
   std::optional<status::SparkplugStatus> sparkplug_status() const;
+  // The native MQTT connection; nullopt with MQTT off.
+  std::optional<status::MqttStatus> mqtt_status() const;
   // The PDO configuration the gateway uses for the described nodes of
   // network `net` (canopen::Network::pdo_config(): EDS/DCF, then what its
   // SDO writes changed and what was read from the devices); nullptr for an

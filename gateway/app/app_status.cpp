@@ -27,6 +27,7 @@ std::shared_ptr<trace::NetworkTrace> AppStatus::frame_tap(std::uint32_t net) con
 const history::ValueHistory* AppStatus::value_history() const { return app_.value_history(); }
 const core::Counters& AppStatus::counters() const { return app_.counters(); }
 
+std::optional<status::MqttStatus> AppStatus::mqtt() const { return app_.mqtt_status(); }
 std::optional<status::SparkplugStatus> AppStatus::sparkplug() const { return app_.sparkplug_status(); }
 
 std::string AppStatus::metrics_text() const { return app_.metrics().render(); }

@@ -32,6 +32,7 @@ class AppStatus final : public status::View {
   std::shared_ptr<trace::NetworkTrace> frame_tap(std::uint32_t net) const override;
   const history::ValueHistory* value_history() const override;
   const core::Counters& counters() const override;
+  std::optional<status::MqttStatus> mqtt() const override;
   std::optional<status::SparkplugStatus> sparkplug() const override;
   std::string metrics_text() const override;
 

@@ -5,6 +5,7 @@
 #include "ascii/ascii_lss.hpp"
 #include "http/http_metrics.hpp"
 #include "metrics/metrics.hpp"
+#include "mqtt/client.hpp"
 #include "mqtt_requests/mqtt_requests.hpp"
 #include "sparkplug/edge_node.hpp"
 #include "rest/rest_api.hpp"
@@ -48,7 +49,9 @@ sparkplug::EdgeNode* add_sparkplug(boost::asio::io_context& io, App& app, Logger
       io, std::move(client), SparkplugOutput::Options{config.sparkplug.aliases, config.sparkplug.commands_role},
       app.requests(), app.status(), log);
   auto* edge = node.get();
-  sparkplug::register_metrics(app.metrics(), edge->client_slot());
+  std::vector<std::string> brokers;
+  for (const auto& u : config.sparkplug.mqtt.uris()) brokers.push_back(mqtt::normalize_server_uri(u));
+  sparkplug::register_metrics(app.metrics(), edge->client_slot(), brokers);
   app.set_sparkplug_status([edge] { return std::optional<status::SparkplugStatus>(edge->status()); });
   app.add_output(std::move(node));
   return edge;

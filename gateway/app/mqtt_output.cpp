@@ -1,6 +1,7 @@
 #include "app/mqtt_output.hpp"
 
 #include "messages/event_encoder.hpp"
+#include "mqtt/client.hpp"
 #include "mqtt/mqtt_metrics.hpp"
 
 namespace gateway {
@@ -19,7 +20,10 @@ MqttOutput::MqttOutput(boost::asio::io_context& io, MqttConfig config, std::stri
 MqttOutput::~MqttOutput() = default;
 
 void MqttOutput::register_metrics(metrics::Registry& r) const {
-  mqtt::register_metrics(r, publisher_, [this] { return requests_ ? requests_->counters().replies_refused : 0; });
+  std::vector<std::string> brokers;
+  for (const auto& u : config_.uris()) brokers.push_back(mqtt::normalize_server_uri(u));
+  mqtt::register_metrics(
+      r, publisher_, [this] { return requests_ ? requests_->counters().replies_refused : 0; }, brokers);
 }
 
 void MqttOutput::set_requests(std::unique_ptr<mqtt::MqttRequests> requests) { requests_ = std::move(requests); }
@@ -41,7 +45,10 @@ void MqttOutput::start() {
   if (requests != nullptr) requests->set_reply_sender(publisher_->reply_sender());
   publisher_->start();
   // Where to look, for a person: the broker and the topics to subscribe to.
-  log_.info("MQTT: broker " + config_.server_uri + ", topic prefix canopen/" + gateway_id_ +
+  std::string brokers;
+  for (const auto& u : config_.uris()) brokers += (brokers.empty() ? "" : ", ") + u;
+  log_.info(std::string(config_.standby_uris.empty() ? "MQTT: broker " : "MQTT: brokers (tried in turn) ") + brokers +
+            ", topic prefix canopen/" + gateway_id_ +
             "/ (subscribe to canopen/" + gateway_id_ + "/#)");
 }
 

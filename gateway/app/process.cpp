@@ -1,5 +1,6 @@
 #include "app/process.hpp"
 
+#include <algorithm>
 #include <pthread.h>
 #include <unistd.h>
 
@@ -44,20 +45,30 @@ std::filesystem::path default_web_root() {
   return {};
 }
 
-// The broker URI as the publisher will read it, checked before anything
-// starts, so a bad one is a configuration error naming --mqtt or the key.
-// The same for the Sparkplug edge node's broker (sparkplug.uri or mqtt's).
-void check_mqtt_uri(const Config& c) {
-  auto check = [](const std::string& uri, const std::string& origin) {
-    try {
-      (void)mqtt::parse_endpoint(mqtt::normalize_server_uri(uri));
-    } catch (const std::invalid_argument& e) {
-      throw ConfigError(origin + ": " + e.what());
+}  // namespace
+
+// Checked before anything starts, so a bad URI is a configuration error.
+void check_mqtt_uris(const Config& c) {
+  // Every broker of a list, each once when normalized (mqtt://a and tcp://a are one).
+  auto check = [](const mqtt::MqttConfig& m, const std::string& origin) {
+    std::vector<std::string> seen;
+    for (const auto& uri : m.uris()) {
+      try {
+        auto normalized = mqtt::normalize_server_uri(uri);
+        (void)mqtt::parse_endpoint(normalized);
+        if (std::find(seen.begin(), seen.end(), normalized) != seen.end())
+          throw std::invalid_argument("'" + uri + "' is the same broker as another URI of the list");
+        seen.push_back(std::move(normalized));
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(origin + ": " + e.what());
+      }
     }
   };
-  if (c.mqtt.enabled) check(c.mqtt.server_uri, c.mqtt.uri_origin);
-  if (c.sparkplug.enabled) check(c.sparkplug.mqtt.server_uri, c.sparkplug.uri_origin);
+  if (c.mqtt.enabled) check(c.mqtt, c.mqtt.uri_origin);
+  if (c.sparkplug.enabled) check(c.sparkplug.mqtt, c.sparkplug.uri_origin);
 }
+
+namespace {
 
 // Why the listener could not be opened, for a person: the errno in words
 // and what usually helps, without the library's internals.
@@ -114,7 +125,7 @@ int run_gateway(const CliOptions& opts) {
   Config config;
   try {
     config = merge(opts.config_file ? load_config(*opts.config_file) : Config{}, opts);
-    check_mqtt_uri(config);
+    check_mqtt_uris(config);
     // Before CAN is opened and anything listens: a state directory that
     // cannot be written is a configuration error, not a failure later.
     check_state_dirs(config);

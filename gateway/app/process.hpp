@@ -12,6 +12,7 @@
 #include <string>
 
 #include "cli.hpp"
+#include "config/config.hpp"
 
 namespace gateway {
 
@@ -24,6 +25,12 @@ inline constexpr int kExitCanUnavailable = 3;  // a CAN interface that cannot be
 // line on stderr, print_error()) when it cannot start. Throws what else goes
 // wrong (main answers 1).
 int run_gateway(const CliOptions& opts);
+
+// The broker URIs of mqtt.uri and of the Sparkplug edge node (sparkplug.uri
+// or mqtt's), every one of a list, as the MQTT client will read them: a bad
+// scheme, no host, or one broker given twice (mqtt://a and tcp://a) throws
+// ConfigError naming where the URI came from (--mqtt, file:line: key).
+void check_mqtt_uris(const Config& c);
 
 // "canopen-gateway: error: <msg>" on stderr, one line: whatever the message
 // quotes cannot break it or drive the terminal.

@@ -130,6 +130,9 @@ void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id
 void parse_tls_files(const At& t, mqtt::MqttConfig& m, const std::string& dir);
 // `mqtt-version`: "5" (with the fallback to 3.1.1) or "3.1.1".
 void parse_mqtt_version(const At& v, mqtt::MqttConfig& m);
+// uri: one URI or a list of them (server_uri, then standby_uris); the
+// scheme and host are checked by main (process.cpp) with the client's rules.
+void parse_mqtt_uris(const At& v, mqtt::MqttConfig& m);
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir);
 // mqtt.qos and mqtt.queue.storage, the per-kind maps (after parse_mqtt()
 // checked they are maps); `file` as given to parse_config().

@@ -97,6 +97,7 @@ Config merge(Config c, const CliOptions& cli) {
   if (cli.mqtt_uri) {
     c.mqtt.enabled = true;
     c.mqtt.server_uri = *cli.mqtt_uri;
+    c.mqtt.standby_uris.clear();
     c.mqtt.uri_origin = "--mqtt " + *cli.mqtt_uri;
   }
   if (cli.mqtt_format) c.mqtt.format = *cli.mqtt_format == "protobuf" ? PayloadFormat::Protobuf : PayloadFormat::Json;
@@ -113,12 +114,13 @@ Config merge(Config c, const CliOptions& cli) {
     // The same broker as the native topics unless sparkplug.uri says
     // otherwise; only then its credentials and TLS files too (mqtt's
     // password is not sent to another broker).
-    const bool same_broker = sp.mqtt.server_uri.empty() || (c.mqtt.enabled && sp.mqtt.server_uri == c.mqtt.server_uri);
+    const bool same_broker = sp.mqtt.server_uri.empty() || (c.mqtt.enabled && sp.mqtt.uris() == c.mqtt.uris());
     if (sp.mqtt.server_uri.empty()) {
       if (!c.mqtt.enabled)
         throw ConfigError(sp.origin + ": no broker for the Sparkplug edge node: set sparkplug.uri, or turn MQTT on "
                                       "(mqtt.uri or --mqtt; Sparkplug then uses the same broker)");
       sp.mqtt.server_uri = c.mqtt.server_uri;
+      sp.mqtt.standby_uris = c.mqtt.standby_uris;
       sp.uri_origin = c.mqtt.uri_origin + " (sparkplug.uri not set)";
     }
     if (same_broker) {

@@ -1,5 +1,6 @@
 // mqtt: (gateway::MqttConfig) and the TLS files of an MQTT connection
 // (also sparkplug.tls).
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -33,12 +34,30 @@ void parse_mqtt_version(const At& v, mqtt::MqttConfig& m) {
   else v.fail("'" + s + "' is not 5 (falls back to 3.1.1 when the broker refuses it) or 3.1.1");
 }
 
+void parse_mqtt_uris(const At& v, mqtt::MqttConfig& m) {
+  m.standby_uris.clear();
+  if (!v.is_seq()) {
+    m.server_uri = v.str();
+    return;
+  }
+  const auto items = v.items();
+  if (items.empty()) v.fail("no broker URI (give one, or a list such as [tcp://a:1883, tcp://b:1883])");
+  std::vector<std::string> uris;
+  for (const auto& item : items) {
+    auto u = item.str();
+    if (std::find(uris.begin(), uris.end(), u) != uris.end()) item.fail("'" + u + "' is in the list twice");
+    uris.push_back(std::move(u));
+  }
+  m.server_uri = uris.front();
+  m.standby_uris.assign(uris.begin() + 1, uris.end());
+}
+
 void parse_mqtt(const At& a, MqttConfig& m, const std::string& dir) {
   a.expect_map({"uri", "client-id", "username", "password", "password-file", "tls", "format", "qos", "heartbeat",
                 "heartbeat-min-interval-ms", "queue", "requests-role", "reply-topics", "mqtt-version"});
   auto uri = a.get("uri");
   if (!uri) a.fail("missing key 'uri' (e.g. tcp://localhost:1883)");
-  m.server_uri = uri->str();
+  parse_mqtt_uris(*uri, m);
   m.uri_origin = uri->where();
   m.enabled = true;
   if (auto v = a.get("client-id")) m.client_id = v->str();

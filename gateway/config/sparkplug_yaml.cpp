@@ -32,7 +32,7 @@ void parse_sparkplug(const At& a, SparkplugConfig& sp, const std::string& dir) {
   if (auto v = a.get("commands-role")) sp.commands_role = parse_role(*v, true);
   auto& m = sp.mqtt;
   if (auto v = a.get("uri")) {
-    m.server_uri = v->str();  // checked with mqtt.uri's rules by main (check_mqtt_uris)
+    parse_mqtt_uris(*v, m);  // checked with mqtt.uri's rules by main (process.cpp)
     sp.uri_origin = v->where();
   }
   if (auto v = a.get("client-id")) m.client_id = v->str();

@@ -325,7 +325,7 @@ void register_requests(Registry& r, std::function<RequestMetrics()> read, const 
 }
 
 // The MQTT publisher and its queue.
-void register_mqtt(Registry& r, std::function<MqttMetrics()> read) {
+void register_mqtt(Registry& r, std::function<MqttMetrics()> read, const std::vector<std::string>& brokers) {
   auto field = [&read](auto MqttMetrics::*f) { return [read, f] { return Value(read().*f); }; };
   const bool enabled = static_cast<bool>(read);
   r.gauge_fn("canopen_gateway_mqtt_enabled", "1 when MQTT publishing is configured.", {},
@@ -333,6 +333,10 @@ void register_mqtt(Registry& r, std::function<MqttMetrics()> read) {
   if (!enabled) return;
   r.gauge_fn("canopen_gateway_mqtt_connected", "1 while connected to the MQTT broker.", {},
              field(&MqttMetrics::connected));
+  for (const auto& uri : brokers)
+    r.gauge_fn("canopen_gateway_mqtt_broker_connected",
+               "1 for the broker of mqtt.uri's list the gateway is connected to, 0 for the others.", {{"uri", uri}},
+               [read, uri] { return Value(read().broker == uri); });
   static constexpr std::string_view msgs = "canopen_gateway_mqtt_messages_total";
   static constexpr std::string_view msgs_help =
       "MQTT messages by result: published (handed to the broker), acked, dropped.";

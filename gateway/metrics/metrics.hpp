@@ -173,8 +173,11 @@ struct MqttMetrics {
   bool storage_failing = false;
   std::uint64_t corrupt_records = 0, corrupt_bytes = 0;
   std::uint64_t stalls = 0;
+  std::string broker;  // the connected broker's URI; "" when not connected
 };
 // An empty read: MQTT is off, only canopen_gateway_mqtt_enabled 0 is written.
-void register_mqtt(Registry& r, std::function<MqttMetrics()> read);
+// brokers: every configured broker URI (normalized), one
+// canopen_gateway_mqtt_broker_connected{uri} series each.
+void register_mqtt(Registry& r, std::function<MqttMetrics()> read, const std::vector<std::string>& brokers = {});
 
 }  // namespace gateway::metrics

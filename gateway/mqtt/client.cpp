@@ -35,8 +35,12 @@ Session::Options Client::common_session_options(const MqttConfig& c) {
 
 Client::Client(asio::io_context& io, const MqttConfig& cfg, Options opts, ClientEvents& events, Logger& log)
     : io_(io), cfg_(cfg), prefix_(opts.log_prefix + ": "), connect_error_hint_(std::move(opts.connect_error_hint)),
-      events_(events), log_(log), uri_(normalize_server_uri(cfg.server_uri)), endpoint_(parse_endpoint(uri_)),
-      retry_timer_(io), session_timer_(io), session_(std::move(opts.session), *this) {}
+      events_(events), log_(log), retry_timer_(io), session_timer_(io), session_(std::move(opts.session), *this) {
+  for (const auto& u : cfg.uris()) {
+    uris_.push_back(normalize_server_uri(u));
+    endpoints_.push_back(parse_endpoint(uris_.back()));
+  }
+}
 
 Client::~Client() = default;
 
@@ -48,12 +52,12 @@ void Client::start(std::weak_ptr<void> owner) {
 }
 
 bool Client::ensure_tls() {
-  if (!endpoint_.tls || tls_ctx_) return true;
+  if (!endpoints_[current_].tls || tls_ctx_) return true;
   try {
     tls_ctx_ = make_tls_context(cfg_);
     return true;
   } catch (const std::exception& e) {
-    log_.error(prefix_ + "TLS setup for " + uri_ + " failed: " + e.what());
+    log_.error(prefix_ + "TLS setup for " + uri() + " failed: " + e.what());
     return false;
   }
 }
@@ -102,7 +106,7 @@ void Client::connect() {
     if (auto keep = current(c)) session_.transport_closed(why);
   };
   conn_ = std::make_shared<MqttConnection>(io_, tls_ctx_.get(), cfg_.verify_server, std::move(cb));
-  conn_->open(endpoint_);
+  conn_->open(endpoints_[current_]);
 }
 
 void Client::drop_connection() {
@@ -124,6 +128,29 @@ void Client::schedule_retry() {
   });
 }
 
+void Client::next_broker() {
+  if (uris_.size() < 2) return;
+  current_ = (current_ + 1) % uris_.size();
+  session_.reset_version();  // another broker may speak MQTT 5
+}
+
+void Client::retry_after_failure(const std::string& what) {
+  const bool first_series = failures_ == 0;
+  if (uris_.size() > 1 && ++tried_in_round_ < uris_.size()) {
+    const std::string failed = uri();
+    next_broker();
+    if (first_series || log_.enabled(LogLevel::Debug))
+      log_.warn(prefix_ + "connect to " + failed + " " + what + ", trying " + uri());
+    connect();
+    return;
+  }
+  tried_in_round_ = 0;
+  if (first_series || log_.enabled(LogLevel::Debug))
+    log_.warn(prefix_ + "connect to " + uri() + " " + what + ", retrying");
+  next_broker();  // the next round starts where this one did
+  schedule_retry();
+}
+
 void Client::went_down(Down cause, const std::string& why) {
   connected_ = false;
   connecting_ = false;
@@ -133,8 +160,10 @@ void Client::went_down(Down cause, const std::string& why) {
 void Client::end_connection(const std::string& why) {
   session_.close();
   drop_connection();
-  if (connected_) log_.warn(prefix_ + "disconnected from " + uri_ + ": " + why);
+  const bool was_connected = connected_;
+  if (was_connected) log_.warn(prefix_ + "disconnected from " + uri() + ": " + why);
   went_down(Down::Ended, why);
+  if (was_connected) next_broker();
   schedule_retry();
 }
 
@@ -190,6 +219,7 @@ void Client::on_connected(const BrokerLimits& limits) {
   }
   connected_ = true;
   failures_ = 0;
+  tried_in_round_ = 0;
   if (connects_++ > 0) ++reconnects_;
   events_.on_up(limits);
 }
@@ -200,13 +230,11 @@ void Client::on_refused(std::uint8_t code, bool fell_back) {
   went_down(Down::Refused, "connect refused (code " + std::to_string(code) + ")");
   if (!running_) return;
   if (fell_back) {
-    log_.warn(prefix_ + "broker " + uri_ + " refuses MQTT 5, falling back to 3.1.1");
+    log_.warn(prefix_ + "broker " + uri() + " refuses MQTT 5, falling back to 3.1.1");
     connect();
     return;
   }
-  if (failures_ == 0 || log_.enabled(LogLevel::Debug))
-    log_.warn(prefix_ + "connect to " + uri_ + " refused (code " + std::to_string(code) + "), retrying");
-  schedule_retry();
+  retry_after_failure("refused (code " + std::to_string(code) + ")");
 }
 
 // The connection failed before or after CONNACK, or the broker closed it
@@ -217,19 +245,19 @@ void Client::on_lost(const std::string& why, bool was_up, bool fell_back) {
     went_down(Down::Failed, why);
     if (!running_) return;
     if (fell_back) {
-      log_.warn(prefix_ + "broker " + uri_ + " closed the connection without a CONNACK to an MQTT 5 CONNECT (" + why +
+      log_.warn(prefix_ + "broker " + uri() + " closed the connection without a CONNACK to an MQTT 5 CONNECT (" + why +
                 "): trying MQTT 3.1.1");
       connect();
       return;
     }
-    if (failures_ == 0 || log_.enabled(LogLevel::Debug))
-      log_.warn(prefix_ + "connect to " + uri_ + " failed: " + why + ", retrying");
-    schedule_retry();
+    retry_after_failure("failed: " + why);
     return;
   }
   // A guard only: on_connected() either connects or closes the session.
   if (!connected_) return;
   went_down(Down::Lost, why);
+  if (!running_) return;
+  next_broker();  // the lost one is likely gone: another member first
   schedule_retry();
 }
 

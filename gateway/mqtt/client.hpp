@@ -10,11 +10,16 @@
 // when the broker refuses 5, or 3.1.1 only: Session::Options::mqtt_version)
 // and the reconnect loop: reconnect_min doubling to reconnect_max
 // (reconnect_delay()) after consecutive failures, reset by an accepted
-// CONNACK. What the owner sends it appends to out() with the Session's
+// CONNACK. With several brokers (MqttConfig::uris(): a cluster, a
+// standby) a failed attempt goes on to the next one at once, a round in
+// which none answered waits the backoff, and a lost connection is followed
+// by an attempt at the next broker: the client stays with the broker it
+// reached until that one goes (no preference for the first). What the owner sends it appends to out() with the Session's
 // encoders (session()) and flush()es; what happens is reported to the
 // owner's ClientEvents.
 //
-// Log lines: "<log_prefix>: connect to <uri> failed: <why>, retrying" and
+// Log lines: "<log_prefix>: connect to <uri> failed: <why>, retrying" (or
+// ", trying <next uri>") and
 // "... refused (code N), retrying" (the first of a series, every one at
 // debug level), "<log_prefix>: broker <uri> refuses MQTT 5, falling back to
 // 3.1.1", "<log_prefix>: TLS setup for <uri> failed: ...",
@@ -35,6 +40,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ssl/context.hpp>
@@ -100,9 +106,10 @@ class Client : private SessionEvents {
   // client id, credentials, keepalive, connect timeout.
   static Session::Options common_session_options(const MqttConfig& c);
 
-  // cfg: server_uri, the TLS files, verify_server, reconnect_min/max (the
-  // session's part is in opts.session). Checks the URI
-  // (std::invalid_argument, as normalize_server_uri and parse_endpoint).
+  // cfg: server_uri and standby_uris, the TLS files, verify_server,
+  // reconnect_min/max (the session's part is in opts.session). Checks
+  // every URI (std::invalid_argument, as normalize_server_uri and
+  // parse_endpoint).
   // Does not connect.
   Client(boost::asio::io_context& io, const MqttConfig& cfg, Options opts, ClientEvents& events, Logger& log);
   ~Client() override;
@@ -147,7 +154,9 @@ class Client : private SessionEvents {
   // Changes with every connection attempt: a handler the owner posts checks
   // it still has the connection it was posted for.
   std::uint64_t connection_id() const { return conn_gen_; }
-  const std::string& uri() const { return uri_; }                                          // normalized
+  // The broker connected to, or the one being tried or tried next (normalized).
+  const std::string& uri() const { return uris_[current_]; }
+  const std::vector<std::string>& uris() const { return uris_; }  // every broker, normalized, in order
   std::uint64_t connects() const { return connects_; }                                     // CONNACKs accepted
   std::uint64_t reconnects() const { return reconnects_; }                                 // connects after the first
   std::uint64_t writes() const { return writes_before_ + (conn_ ? conn_->writes() : 0); }  // socket writes
@@ -158,6 +167,11 @@ class Client : private SessionEvents {
   void drop_connection();
   void schedule_retry();
   void went_down(Down cause, const std::string& why);
+  // After a failed attempt: the next broker at once while this round has
+  // not tried every one, else the backoff. `what`: "failed: <why>" or
+  // "refused (code N)".
+  void retry_after_failure(const std::string& what);
+  void next_broker();
 
   // SessionEvents
   void on_connected(const BrokerLimits& limits) override;
@@ -176,8 +190,10 @@ class Client : private SessionEvents {
   std::string connect_error_hint_;
   ClientEvents& events_;
   Logger& log_;
-  std::string uri_;
-  Endpoint endpoint_;
+  std::vector<std::string> uris_;  // normalized, never empty
+  std::vector<Endpoint> endpoints_;
+  std::size_t current_ = 0;        // uris_ index
+  std::size_t tried_in_round_ = 0; // brokers that failed since the last connect or backoff
   std::weak_ptr<void> owner_;
   std::unique_ptr<boost::asio::ssl::context> tls_ctx_;
   boost::asio::steady_timer retry_timer_;

@@ -43,6 +43,9 @@ constexpr PerKind<std::uint8_t> kDefaultQos = {{1, 1, 1, 0, 1, 0, 0, 0, 0, 1, 1}
 
 struct MqttConfig {
   std::string server_uri;   // tcp:// ssl:// mqtt:// mqtts:// (host[:port])
+  // More brokers (a cluster's other members, a standby), tried in turn
+  // after server_uri; the same client id, credentials and TLS files.
+  std::vector<std::string> standby_uris;
   std::string client_id;    // MUST be unique on the broker
   std::string username;     // empty: none
   std::string password;
@@ -84,6 +87,13 @@ struct MqttConfig {
   // Topic filters a reply topic must match instead of the default rule
   // (mqtt.reply-topics); each MUST be valid (topic_filter_problem).
   std::vector<std::string> reply_topics;
+
+  // server_uri, then the standbys.
+  std::vector<std::string> uris() const {
+    std::vector<std::string> all{server_uri};
+    all.insert(all.end(), standby_uris.begin(), standby_uris.end());
+    return all;
+  }
 
   int qos_for(EventKind k) const { return qos[k]; }
   // The kind's storage; by default `disk` for QoS 1 kinds and `outage` for

@@ -16,6 +16,7 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, std::uint64_t re
   m.reconnects = c.reconnects;
   m.requests_refused = requests_refused;
   m.stalls = c.stalls;
+  m.broker = c.broker;
   m.storage_failing = c.storage_failing;
   m.memory_depth = t.memory_depth;
   m.spilled = t.spilled + t.to_disk;
@@ -34,10 +35,13 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, std::uint64_t re
 }
 
 void register_metrics(metrics::Registry& r, const std::unique_ptr<MqttPublisher>& publisher,
-                      std::function<std::uint64_t()> requests_refused) {
-  metrics::register_mqtt(r, [&publisher, refused = std::move(requests_refused)] {
-    return publisher ? to_metrics(*publisher, refused ? refused() : 0) : metrics::MqttMetrics{};
-  });
+                      std::function<std::uint64_t()> requests_refused, const std::vector<std::string>& brokers) {
+  metrics::register_mqtt(
+      r,
+      [&publisher, refused = std::move(requests_refused)] {
+        return publisher ? to_metrics(*publisher, refused ? refused() : 0) : metrics::MqttMetrics{};
+      },
+      brokers);
 }
 
 }  // namespace gateway::mqtt

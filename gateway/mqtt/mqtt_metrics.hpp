@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "metrics/metrics.hpp"
 #include "mqtt/publisher.hpp"
@@ -22,8 +24,9 @@ metrics::MqttMetrics to_metrics(const MqttPublisher& publisher, std::uint64_t re
 // may build it later (at start); while `publisher` is empty every series
 // reads 0. `requests_refused` (may be empty: 0) reads the request front
 // end's count at render time. The slot and what the function reads MUST
-// outlive the registry's render() calls.
+// outlive the registry's render() calls. brokers: the configured URIs,
+// normalized (Client::uris()), for canopen_gateway_mqtt_broker_connected.
 void register_metrics(metrics::Registry& r, const std::unique_ptr<MqttPublisher>& publisher,
-                      std::function<std::uint64_t()> requests_refused);
+                      std::function<std::uint64_t()> requests_refused, const std::vector<std::string>& brokers = {});
 
 }  // namespace gateway::mqtt

@@ -461,6 +461,7 @@ struct MqttPublisher::Impl : std::enable_shared_from_this<MqttPublisher::Impl>, 
     c.reconnects = client.reconnects();
     c.connected = client.connected();
     c.mqtt_version = client.version();
+    if (c.connected) c.broker = client.uri();
     c.socket_writes = client.writes();
     return c;
   }

@@ -131,6 +131,7 @@ class MqttPublisher {
     bool storage_failing = false;       // the DiskQueue cannot write (see storage failures)
     bool connected = false;
     int mqtt_version = 0;               // of the current connection: 5 or 4
+    std::string broker;                 // the connected broker (normalized URI); "" when not connected
   };
 
   // Every PUBLISH the broker delivers on a request subscription, on the io

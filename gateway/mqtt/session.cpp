@@ -138,6 +138,12 @@ void Session::close() {
   set_deadline(std::nullopt);
 }
 
+void Session::reset_version() {
+  if (state_ != State::Idle) return;
+  version_ = opts_.mqtt_version >= 5 ? codec::kMqtt5 : codec::kMqtt311;
+  fell_back_ = false;
+}
+
 void Session::lost(const std::string& why, bool closed_awaiting_connack) {
   const bool was_up = state_ == State::Up;
   bool fall_back = false;

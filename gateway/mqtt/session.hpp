@@ -156,6 +156,10 @@ class Session {
   // itself): state Idle, no events; what was in flight goes to
   // resend_list().
   void close();
+  // The next CONNECT is at the configured version again, whatever the
+  // last broker made it fall back to (the client moved on to another
+  // broker of its list, which may speak MQTT 5). Only while Idle.
+  void reset_version();
 
   // --- sending (state Up) ---------------------------------------------
   // A queue message; QoS 1 only while window_open(). DUP when the token is

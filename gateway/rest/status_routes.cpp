@@ -72,6 +72,26 @@ json::object node_summary(const Context& ctx, std::uint32_t net, const NodeInfo&
   return o;
 }
 
+// "5", "3.1.1", or null when not connected.
+json::value version_name(int v) {
+  if (v == 5) return json::value("5");
+  if (v == 4) return json::value("3.1.1");
+  return json::value(nullptr);
+}
+
+// The native MQTT connection (GET /api/v1/gateway).
+json::object mqtt_json(const status::MqttStatus& m) {
+  json::object o;
+  o["connected"] = m.connected;
+  o["broker"] = m.broker.empty() ? json::value(nullptr) : json::value(m.broker);
+  o["mqttVersion"] = version_name(m.mqtt_version);
+  json::array brokers;
+  for (const auto& b : m.brokers) brokers.emplace_back(b);
+  o["brokers"] = std::move(brokers);
+  o["reconnects"] = m.reconnects;
+  return o;
+}
+
 // The Sparkplug B edge node's session (GET /api/v1/gateway).
 json::object sparkplug_json(const status::SparkplugStatus& sp) {
   json::object o;
@@ -79,6 +99,8 @@ json::object sparkplug_json(const status::SparkplugStatus& sp) {
   o["edgeNodeId"] = sp.edge_node_id;
   o["state"] = sp.state;
   o["connected"] = sp.connected;
+  o["broker"] = sp.broker.empty() ? json::value(nullptr) : json::value(sp.broker);
+  o["mqttVersion"] = version_name(sp.mqtt_version);
   o["bdSeq"] = sp.bd_seq ? json::value(*sp.bd_seq) : json::value(nullptr);
   const auto rebirth = sp.last_rebirth_ms;
   o["lastRebirth"] = rebirth ? json::value(timestamp_text(WallTime(std::chrono::milliseconds(*rebirth))))
@@ -126,6 +148,7 @@ void get_gateway(const Context& ctx, const Request&, Responder respond) {
   c["sdoTimeouts"] = ctx.status.counters().sdo_timeouts;
   c["nmtCommands"] = ctx.status.counters().nmt_commands;
   o["counters"] = std::move(c);
+  if (const auto m = ctx.status.mqtt()) o["mqtt"] = mqtt_json(*m);
   if (const auto sp = ctx.status.sparkplug()) o["sparkplug"] = sparkplug_json(*sp);
   respond(json_response(o));
 }

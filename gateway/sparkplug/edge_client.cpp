@@ -277,6 +277,7 @@ void EdgeClient::send(std::vector<Outgoing>& out) { impl_->send(out); }
 std::uint64_t EdgeClient::now_ms() const { return impl_->now_ms(); }
 bool EdgeClient::connected() const { return impl_->client.connected(); }
 int EdgeClient::mqtt_version() const { return impl_->client.version(); }
+std::string EdgeClient::broker() const { return impl_->client.connected() ? impl_->client.uri() : std::string(); }
 EdgeClient::Counters EdgeClient::counters() const {
   Counters c = impl_->counters;
   c.connects = impl_->client.connects();
@@ -285,13 +286,18 @@ EdgeClient::Counters EdgeClient::counters() const {
 }
 const EdgeClientConfig& EdgeClient::config() const { return impl_->cfg; }
 
-void register_metrics(metrics::Registry& r, const std::unique_ptr<EdgeClient>& client) {
+void register_metrics(metrics::Registry& r, const std::unique_ptr<EdgeClient>& client,
+                      const std::vector<std::string>& brokers) {
   using metrics::Value;
   auto counter = [&client](auto f) {
     return [&client, f]() -> Value { return client ? Value(f(client->counters())) : Value(std::uint64_t{0}); };
   };
   r.gauge_fn("canopen_gateway_sparkplug_connected", "1 while the Sparkplug B edge node is connected to its broker.",
              {}, [&client] { return Value(client && client->connected()); });
+  for (const auto& uri : brokers)
+    r.gauge_fn("canopen_gateway_sparkplug_broker_connected",
+               "1 for the broker of sparkplug.uri's list the edge node is connected to, 0 for the others.",
+               {{"uri", uri}}, [&client, uri] { return Value(client && client->broker() == uri); });
   r.gauge_fn("canopen_gateway_sparkplug_online",
              "1 while the Sparkplug B edge node is born (NBIRTH and every DBIRTH sent on this connection).", {},
              [&client] { return Value(client && client->edge().state() == EdgeSession::State::Born); });

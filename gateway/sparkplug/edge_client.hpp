@@ -118,6 +118,7 @@ class EdgeClient {
   // --- state (REST, /metrics) ---------------------------------------------
   bool connected() const;
   int mqtt_version() const;  // 5 or 4 while connected, else 0
+  std::string broker() const;  // the connected broker's URI (normalized); "" when not connected
   Counters counters() const;
   const EdgeClientConfig& config() const;
 
@@ -133,7 +134,10 @@ const char* state_name(EdgeSession::State s);
 
 // The client's /metrics families (canopen_gateway_sparkplug_*), read at
 // every render() from the slot as its owner holds it (empty: zeros). The
-// slot MUST outlive the registry's render() calls.
-void register_metrics(metrics::Registry& r, const std::unique_ptr<EdgeClient>& client);
+// slot MUST outlive the registry's render() calls. brokers: the configured
+// URIs, normalized, one canopen_gateway_sparkplug_broker_connected{uri}
+// series each.
+void register_metrics(metrics::Registry& r, const std::unique_ptr<EdgeClient>& client,
+                      const std::vector<std::string>& brokers = {});
 
 }  // namespace gateway::sparkplug

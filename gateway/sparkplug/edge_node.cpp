@@ -53,6 +53,8 @@ status::SparkplugStatus EdgeNode::status() const {
   s.edge_node_id = cfg.session.edge_node_id;
   s.state = state_name(edge.state());
   s.connected = client_->connected();
+  s.broker = client_->broker();
+  s.mqtt_version = client_->mqtt_version();
   s.bd_seq = edge.bd_seq();
   s.last_rebirth_ms = edge.last_rebirth();
   s.primary_host_id = cfg.session.primary_host_id;

@@ -57,12 +57,23 @@ struct SparkplugStatus {
   std::string group_id, edge_node_id;
   std::string state;  // sparkplug::state_name()
   bool connected = false;
+  std::string broker;    // the connected broker (normalized URI), "" when none
+  int mqtt_version = 0;  // 5 or 4 while connected
   std::optional<std::uint8_t> bd_seq;
   std::optional<std::uint64_t> last_rebirth_ms;  // Unix time
   std::string primary_host_id;                   // "" = none configured
   bool primary_host_online = false;
   std::uint64_t messages_published = 0;
   std::uint64_t commands_received = 0;
+};
+
+// The native MQTT connection as GET /api/v1/gateway shows it.
+struct MqttStatus {
+  bool connected = false;
+  std::string broker;                // the connected broker (normalized URI), "" when none
+  int mqtt_version = 0;              // 5 or 4 while connected
+  std::vector<std::string> brokers;  // every configured broker, in the order they are tried
+  std::uint64_t reconnects = 0;
 };
 
 class View {
@@ -111,6 +122,8 @@ class View {
   // ---- counters and outputs
   // The request core's counters and SDO latency histogram.
   virtual const core::Counters& counters() const = 0;
+  // The native MQTT connection; nullopt unless mqtt is enabled.
+  virtual std::optional<MqttStatus> mqtt() const = 0;
   // The Sparkplug B edge node's session; nullopt unless sparkplug is enabled.
   virtual std::optional<SparkplugStatus> sparkplug() const = 0;
   // The process's metrics in the Prometheus text format (/metrics).

@@ -5,12 +5,18 @@
 # The gateway (default mqtt-version 5) tries 3.1.1 at once, says so in the
 # log, and its events arrive. RabbitMQ runs as a plain process of this test
 # (its own node name, ports, epmd port and directories; stopped by PID).
+# Issue 27 item 2: with mqtt.uri the list [RabbitMQ, mosquitto] the gateway
+# goes on to mosquitto when RabbitMQ goes, with MQTT 5 there (the version
+# is found per broker), names it in GET /api/v1/gateway and publishes its
+# retained topics there.
 TMPDIR=$(mktemp -d /tmp/host-test.XXXXXX)
 export TMPDIR
 RMQ_PID=
 SUB_PID=
+SUB2_PID=
 cleanup() {
-  kill $SUB_PID $GW_PID 2>/dev/null || true
+  kill $SUB_PID $SUB2_PID $GW_PID 2>/dev/null || true
+  [ -n "${MOSQ_PID:-}" ] && kill "$MOSQ_PID" 2>/dev/null
   if [ -n "$RMQ_PID" ]; then
     kill "$RMQ_PID" 2>/dev/null
     i=0  # epmd stops only once no node is registered with it
@@ -76,4 +82,40 @@ wait_count "$T/mqtt.log" "^canopen/$GW/1/[0-9]+/tpdo/" 5 10
 wait_for "$T/mqtt.log" "^canopen/$GW/status " 5
 pass "MQTT 5 closed without CONNACK -> 3.1.1 at once: status and" \
   "$(grep -c "/tpdo/" "$T/mqtt.log") TPDOs through RabbitMQ"
+stop_gateway
+
+# ---- a list of brokers: RabbitMQ first, mosquitto second ---------------------
+MOSQ_PORT=$(free_port)
+start_mosquitto
+mosquitto_sub -h 127.0.0.1 -p "$MOSQ_PORT" -v -t "canopen/$GW/#" > "$T/mosq.log" 2>&1 &
+SUB2_PID=$!
+HTTP_PORT=$(free_port)
+cat > "$T/gw2.yaml" <<YAML
+gateway: {id: $GW, state-dir: $T/state2}
+networks:
+  - simulated: true
+    simulation: {tpdo-period-ms: 100, heartbeat-ms: 500, emcy-period-ms: 0}
+mqtt:
+  uri: [tcp://127.0.0.1:$RMQ_MQTT, mqtt://127.0.0.1:$MOSQ_PORT]
+YAML
+# broker_of: GET /api/v1/gateway's "mqtt" as "<broker> <mqttVersion>".
+broker_of() {
+  /usr/bin/python3 -c 'import json,sys,urllib.request
+m = json.load(urllib.request.urlopen(sys.argv[1]))["mqtt"]
+print(m["broker"], m["mqttVersion"])' "http://127.0.0.1:$HTTP_PORT/api/v1/gateway"
+}
+start_gateway --config "$T/gw2.yaml" --http "127.0.0.1:$HTTP_PORT"
+wait_for "$GW_LOG" "connected to tcp://127.0.0.1:$RMQ_MQTT with MQTT 3.1.1" 10
+[ "$(broker_of)" = "tcp://127.0.0.1:$RMQ_MQTT 3.1.1" ] || fail "GET /api/v1/gateway: $(broker_of)"
+kill "$RMQ_PID"
+i=0
+while kill -0 "$RMQ_PID" 2>/dev/null && [ $i -lt 200 ]; do sleep 0.1; i=$((i + 1)); done
+RMQ_PID=
+wait_for "$GW_LOG" "connected to tcp://127.0.0.1:$MOSQ_PORT with MQTT 5" 20
+[ "$(broker_of)" = "tcp://127.0.0.1:$MOSQ_PORT 5" ] || fail "GET /api/v1/gateway after the switch: $(broker_of)"
+wait_for "$T/mosq.log" "^canopen/$GW/status " 5
+wait_for "$T/mosq.log" "^canopen/$GW/1/bus " 5
+wait_count "$T/mosq.log" "^canopen/$GW/1/[0-9]+/tpdo/" 5 10
+pass "RabbitMQ (3.1.1) gone -> mosquitto (MQTT 5), named in GET /api/v1/gateway; status, bus and" \
+  "$(grep -c "/tpdo/" "$T/mosq.log") TPDOs there"
 stop_gateway

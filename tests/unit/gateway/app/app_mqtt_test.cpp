@@ -157,5 +157,62 @@ TEST(AppMqtt, AfterACleanStopNothingRetainedClaimsANodeRuns) {
   EXPECT_TRUE(deleted.contains("canopen/test/1/5/state"));
 }
 
+// Issue 27 item 2 (contract "Brokers"): with mqtt.uri a list, the
+// gateway's status view (GET /api/v1/gateway's "mqtt") and /metrics say
+// which broker it is connected to; after the first goes, the second has
+// the retained status and bus topics (published again on the new
+// connection).
+TEST(AppMqtt, StatusAndMetricsNameTheConnectedBrokerOfAList) {
+  if (!have_mosquitto()) GTEST_SKIP() << "no " << kMosquitto;
+  Broker first, second;
+  ASSERT_TRUE(first.start()) << first.log();
+  ASSERT_TRUE(second.start()) << second.log();
+  TempDir state;
+  Config config = demo_config(first, state);
+  config.mqtt.standby_uris = {"mqtt://127.0.0.1:" + std::to_string(second.port())};
+  config.mqtt.reconnect_min = std::chrono::milliseconds(100);
+  Logger log(LogLevel::Error);
+  IoThread io;
+  std::unique_ptr<App> app;
+  io.call([&] {
+    app = std::make_unique<App>(io.io(), config, log);
+    app->start();
+    return 0;
+  });
+  auto status = [&] { return io.call([&] { return *app->status().mqtt(); }); };
+  auto metrics = [&] { return io.call([&] { return app->metrics().render(); }); };
+  auto series = [](const Broker& b, int v) {
+    return "canopen_gateway_mqtt_broker_connected{uri=\"" + b.uri() + "\"} " + std::to_string(v) + "\n";
+  };
+  ASSERT_TRUE(eventually([&] { return status().connected; })) << first.log();
+  auto s = status();
+  EXPECT_EQ(s.broker, first.uri());
+  EXPECT_EQ(s.mqtt_version, 5);
+  EXPECT_EQ(s.brokers, (std::vector<std::string>{first.uri(), second.uri()})) << "normalized, in order";
+  auto m = metrics();
+  EXPECT_NE(m.find(series(first, 1)), std::string::npos) << m;
+  EXPECT_NE(m.find(series(second, 0)), std::string::npos) << m;
+
+  first.stop();
+  ASSERT_TRUE(eventually([&] { return status().broker == second.uri(); }, 10s)) << second.log();
+  m = metrics();
+  EXPECT_NE(m.find(series(first, 0)), std::string::npos) << m;
+  EXPECT_NE(m.find(series(second, 1)), std::string::npos) << m;
+  EXPECT_EQ(status().reconnects, 1u);
+
+  Subscriber late(second.uri(), "late", {"canopen/test/status", "canopen/test/1/bus"}, {});
+  ASSERT_TRUE(late.connect());
+  ASSERT_TRUE(late.wait_topic("canopen/test/status", 5s)) << "retained on the new broker";
+  ASSERT_TRUE(late.wait_topic("canopen/test/1/bus", 5s));
+  EXPECT_EQ(boost::json::parse(late.on_topic("canopen/test/status").back()->get_payload_str()).at("state").as_string(),
+            "online");
+
+  io.call([&] {
+    app->stop();
+    app.reset();
+    return 0;
+  });
+}
+
 }  // namespace
 }  // namespace gateway

@@ -795,6 +795,41 @@ TEST(Config, MqttVersionIsFiveOr311) {
   EXPECT_THAT(config_error("mqtt: {uri: tcp://b:1883, mqtt-version: 3}\n"), HasSubstr("mqtt.mqtt-version: '3' is not 5"));
 }
 
+// Issue 27 item 2 (contract "Brokers"): mqtt.uri and sparkplug.uri take
+// one URI or a list, tried in turn; Sparkplug on mqtt's brokers inherits
+// the whole list (and, being the same brokers, the credentials); --mqtt
+// replaces the list with its one URI.
+TEST(Config, BrokerUriListsForClustersAndStandbys) {
+  const auto c = parse_config("mqtt: {uri: [tcp://a:1883, ssl://b:8883, mqtt://c]}\n", "gw.yaml");
+  EXPECT_EQ(c.mqtt.server_uri, "tcp://a:1883");
+  EXPECT_EQ(c.mqtt.standby_uris, (std::vector<std::string>{"ssl://b:8883", "mqtt://c"}));
+  EXPECT_EQ(c.mqtt.uris(), (std::vector<std::string>{"tcp://a:1883", "ssl://b:8883", "mqtt://c"}));
+  EXPECT_TRUE(parse_config("mqtt: {uri: tcp://a:1883}\n", "gw.yaml").mqtt.standby_uris.empty());
+  EXPECT_EQ(parse_config("mqtt:\n  uri:\n    - tcp://a\n    - tcp://b\n", "gw.yaml").mqtt.uris(),
+            (std::vector<std::string>{"tcp://a", "tcp://b"}));
+  EXPECT_THAT(config_error("mqtt: {uri: []}\n"), HasSubstr("mqtt.uri: no broker URI"));
+  EXPECT_THAT(config_error("mqtt: {uri: [tcp://a, tcp://a]}\n"), HasSubstr("'tcp://a' is in the list twice"));
+
+  const std::string base = "gateway: {id: gw7}\nnetworks:\n  - interface: can0\n"
+                           "mqtt: {uri: [tcp://a:1883, tcp://b:1883], username: u, password: p}\n";
+  const Config inherited = merge(parse_config(base + "sparkplug: {group-id: g}\n", "gw.yaml"), CliOptions{});
+  EXPECT_EQ(inherited.sparkplug.mqtt.uris(), (std::vector<std::string>{"tcp://a:1883", "tcp://b:1883"}));
+  EXPECT_EQ(inherited.sparkplug.mqtt.username, "u") << "the same brokers: mqtt's credentials";
+  const Config listed =
+      merge(parse_config(base + "sparkplug: {group-id: g, uri: [tcp://a:1883, tcp://b:1883]}\n", "gw.yaml"),
+            CliOptions{});
+  EXPECT_EQ(listed.sparkplug.mqtt.username, "u") << "the same list, the same brokers";
+  const Config other =
+      merge(parse_config(base + "sparkplug: {group-id: g, uri: [tcp://s1:1883, tcp://s2:1883]}\n", "gw.yaml"),
+            CliOptions{});
+  EXPECT_EQ(other.sparkplug.mqtt.uris(), (std::vector<std::string>{"tcp://s1:1883", "tcp://s2:1883"}));
+  EXPECT_EQ(other.sparkplug.mqtt.username, "") << "other brokers get none of mqtt's credentials";
+
+  CliOptions cli;
+  cli.mqtt_uri = "tcp://flag:1883";
+  EXPECT_EQ(merge(parse_config(base, "gw.yaml"), cli).mqtt.uris(), std::vector<std::string>{"tcp://flag:1883"});
+}
+
 // A control character in the file is not echoed raw into the one-line
 // error (it could end the line or drive the terminal): it reads \xNN.
 TEST(Config, ControlCharactersInMessagesAreEscaped) {

@@ -91,7 +91,7 @@ std::string render(const Values& s) {
                          s.mqtt_queue_depth,     s.mqtt_queue_bytes,    s.mqtt_reconnects,    s.mqtt_requests_refused,
                          s.mqtt_dropped_by_reason, s.mqtt_memory_depth, s.mqtt_spilled,       s.mqtt_storage_bytes,
                          s.mqtt_storage_syncs,   s.mqtt_storage_errors, s.mqtt_storage_failing, s.mqtt_corrupt_records,
-                         s.mqtt_corrupt_bytes,   s.mqtt_stalls};
+                         s.mqtt_corrupt_bytes,   s.mqtt_stalls,            {}};
     });
   else
     register_mqtt(r, {});

@@ -711,6 +711,83 @@ TEST_F(MqttPublisherTest, RetainedTopicsArePublishedAgainOnANewConnection) {
   EXPECT_FALSE(late.on_topic("canopen/gw1/status").empty()) << "the status too";
 }
 
+// Issue 27 item 2 (contract "Brokers"): with a list of brokers, a lost
+// connection is followed by the next broker; what the disk queue took
+// meanwhile drains to whichever is reached, in order, nothing lost; the
+// connected broker is in the counters (GET /api/v1/gateway, /metrics). It
+// stays there until that one goes, then the next in turn (here the first
+// again).
+TEST_F(MqttPublisherTest, FailsOverToTheNextBrokerAndLosesNothing) {
+  start_broker();
+  Broker standby;
+  ASSERT_TRUE(standby.start()) << standby.log();
+  Subscriber on_a(broker_->uri(), "failover-a", {"canopen/gw1/1/5/emcy"}, {});
+  Subscriber on_b(standby.uri(), "failover-b", {"canopen/gw1/1/5/emcy"}, {});
+  ASSERT_TRUE(on_a.connect());
+  ASSERT_TRUE(on_b.connect());
+  auto c = config();
+  c.standby_uris = {"mqtt://127.0.0.1:" + std::to_string(standby.port())};
+  start_publisher(c);
+  EXPECT_EQ(counters().broker, broker_->uri()) << "the first of the list first";
+
+  for (int i = 0; i < 100; ++i) publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", std::to_string(i), false));
+  ASSERT_TRUE(on_a.wait_count(100, 10s));
+  ASSERT_TRUE(eventually([&] { return counters().queue_depth == 0; }, 10s));
+
+  broker_->stop();
+  ASSERT_TRUE(eventually([&] { return counters().broker != broker_->uri(); }, 10s));
+  // While it switches (disconnected, then on the standby): QoS 1 messages
+  // to the disk queue, then straight out.
+  constexpr int kN = 1100;
+  for (int i = 100; i < kN; i += 10) {
+    io_.call([&] {
+      for (int j = i; j < i + 10; ++j)
+        pub_->publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", std::to_string(j), false));
+    });
+    std::this_thread::sleep_for(1ms);
+  }
+  ASSERT_TRUE(eventually([&] { return counters().broker == standby.uri(); }, 10s)) << standby.log();
+  ASSERT_TRUE(on_b.wait_count(kN - 100, 20s)) << "got " << on_b.messages().size();
+  std::this_thread::sleep_for(300ms);  // a duplicate would show up now
+  auto got = payloads(on_b.messages());
+  EXPECT_EQ(got, numbers(100, kN)) << "every message published after the switch began, once, in order";
+  auto k = counters();
+  EXPECT_EQ(k.dropped, 0u);
+  EXPECT_EQ(k.queue_depth, 0u);
+  EXPECT_EQ(k.reconnects, 1u);
+
+  // The first broker back, the standby gone: back to the first.
+  ASSERT_TRUE(broker_->start()) << broker_->log();
+  Subscriber on_a_again(broker_->uri(), "failover-a2", {"canopen/gw1/1/5/emcy"}, {});
+  ASSERT_TRUE(on_a_again.connect());
+  standby.stop();
+  ASSERT_TRUE(eventually([&] { return counters().broker == broker_->uri(); }, 20s));
+  publish(make_event(EventKind::Emcy, "canopen/gw1/1/5/emcy", "after", false));
+  ASSERT_TRUE(on_a_again.wait_topic("canopen/gw1/1/5/emcy", 10s));
+  EXPECT_EQ(payloads(on_a_again.messages()), std::vector<std::string>{"after"});
+  EXPECT_EQ(counters().dropped, 0u);
+}
+
+// Issue 27 item 2: at start, a broker of the list that does not answer is
+// followed by the next at once (not after the reconnect delay), and the log
+// says so; a whole round without an answer waits the delay.
+TEST_F(MqttPublisherTest, AtStartABrokerThatDoesNotAnswerIsFollowedByTheNextAtOnce) {
+  start_broker();
+  const int dead = free_port();  // nothing listens
+  auto c = config();
+  c.server_uri = "tcp://127.0.0.1:" + std::to_string(dead);
+  c.standby_uris = {"tcp://127.0.0.1:" + std::to_string(broker_->port())};
+  c.reconnect_min = 10s;  // "at once": well before the delay
+  const auto t0 = std::chrono::steady_clock::now();
+  start_publisher(c, &captured_log_);
+  EXPECT_LT(std::chrono::steady_clock::now() - t0, 5s);
+  EXPECT_EQ(counters().broker, broker_->uri());
+  EXPECT_EQ(counters().mqtt_version, 5);
+  const auto text = captured_.text();
+  EXPECT_NE(text.find("connect to tcp://127.0.0.1:" + std::to_string(dead) + " failed: "), std::string::npos) << text;
+  EXPECT_NE(text.find("trying " + broker_->uri()), std::string::npos) << text;
+}
+
 // Batching: every PUBLISH ready in one io loop turn goes to the socket in
 // one write (QoS 0: the messages leave the queue once written).
 TEST_F(MqttPublisherTest, OneWriteCarriesEveryPublishOfALoopTurn) {

@@ -341,6 +341,35 @@ TEST_F(SessionTest, FallsBackTo311WhenTheBrokerClosesWithoutAConnack) {
   EXPECT_EQ(s->version(), codec::kMqtt311);
 }
 
+// Issue 27 item 2: a broker that refused MQTT 5 fixes 3.1.1 for itself
+// only; the client moving on to the next broker of its list resets the
+// version (reset_version), so that one is asked for 5 first. Not while an
+// attempt is under way; never above what is configured.
+TEST_F(SessionTest, ResetVersionForgetsAFallbackForTheNextBroker) {
+  make(options());
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_connected(out, clock.now());
+  s->received(out, connack5(0x84), clock.now());  // "unsupported protocol version"
+  ASSERT_EQ(s->version(), codec::kMqtt311);
+  out.clear();
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->reset_version();  // Connecting: ignored
+  EXPECT_EQ(s->version(), codec::kMqtt311);
+  s->transport_closed("connection refused");  // before the transport: no fallback logic
+  ASSERT_EQ(s->version(), codec::kMqtt311) << "refused 5 in so many words: kept for this broker";
+  s->reset_version();
+  EXPECT_EQ(s->version(), codec::kMqtt5);
+  ASSERT_EQ(s->open(clock.now()), codec::Error::None);
+  s->transport_connected(out, clock.now());
+  EXPECT_EQ(packets(out).at(0).body[6], 5) << "protocol level 5 for the next broker";
+
+  auto o = options();
+  o.mqtt_version = 4;
+  make(o);
+  s->reset_version();
+  EXPECT_EQ(s->version(), codec::kMqtt311) << "3.1.1 only stays 3.1.1";
+}
+
 TEST_F(SessionTest, WindowFillsAndPubacksRefillIt) {
   auto o = options();
   o.inflight_window = 3;

@@ -4,6 +4,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+
 #include "canopen_gateway.pb.h"
 #include "rest_rig.hpp"
 
@@ -526,6 +530,8 @@ TEST(Rest, GatewayShowsTheSparkplugSessionAndItsMetrics) {
   EXPECT_EQ(sp.at("edgeNodeId").as_string(), "test");
   EXPECT_EQ(sp.at("state").as_string(), "offline");
   EXPECT_FALSE(sp.at("connected").as_bool());
+  EXPECT_TRUE(sp.at("broker").is_null());
+  EXPECT_TRUE(sp.at("mqttVersion").is_null());
   EXPECT_EQ(sp.at("bdSeq").to_number<int>(), 0) << "the first CONNECT's (no state dir: starts at 0)";
   EXPECT_TRUE(sp.at("lastRebirth").is_null());
   EXPECT_EQ(sp.at("primaryHost").as_object().at("id").as_string(), "scada-1");
@@ -535,6 +541,7 @@ TEST(Rest, GatewayShowsTheSparkplugSessionAndItsMetrics) {
 
   const auto m = rig.request("GET", "/metrics").body;
   EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_connected 0\n"));
+  EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_broker_connected{uri=\"tcp://127.0.0.1:1\"} 0\n"));
   EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_online 0\n"));
   EXPECT_THAT(m, HasSubstr("canopen_gateway_sparkplug_bdseq 0\n"));
   for (const char* type : {"NBIRTH", "NDEATH", "DBIRTH", "DDEATH", "NDATA", "DDATA"})
@@ -545,6 +552,38 @@ TEST(Rest, GatewayShowsTheSparkplugSessionAndItsMetrics) {
                              "canopen_gateway_sparkplug_reconnects_total 0\n",
                              "canopen_gateway_sparkplug_published_bytes_total 0\n"})
     EXPECT_THAT(m, HasSubstr(family));
+}
+
+// Issue 27 item 2: GET /api/v1/gateway carries the native MQTT connection
+// when MQTT is on: here a list of two brokers nobody listens on, so not
+// connected and no broker; /metrics has one series per broker. (Connected,
+// the broker it reached: app_mqtt_test.cpp.)
+TEST(Rest, GatewayShowsTheMqttConnectionAndItsBrokers) {
+  RestRig plain;
+  EXPECT_FALSE(plain.request("GET", "/api/v1/gateway").json().as_object().contains("mqtt")) << "only when configured";
+  const auto queue = std::filesystem::temp_directory_path() / ("rest_mqtt_" + std::to_string(::getpid()));
+  {
+    RestRig rig({}, [&](Config& c) {
+      c.mqtt.enabled = true;
+      c.mqtt.server_uri = "mqtt://127.0.0.1:1";  // nobody listens
+      c.mqtt.standby_uris = {"tcp://127.0.0.1:2"};
+      c.mqtt.client_id = "test-mqtt";
+      c.mqtt.queue.dir = queue;
+    });
+    rig.io.run_for(100ms);  // the first round of attempts fails
+    auto g = rig.request("GET", "/api/v1/gateway");
+    ASSERT_EQ(g.status, 200) << g.body;
+    const auto& m = g.json().as_object().at("mqtt").as_object();
+    EXPECT_FALSE(m.at("connected").as_bool());
+    EXPECT_TRUE(m.at("broker").is_null());
+    EXPECT_TRUE(m.at("mqttVersion").is_null());
+    EXPECT_EQ(m.at("brokers"), (json::array{"tcp://127.0.0.1:1", "tcp://127.0.0.1:2"})) << "normalized, in order";
+    EXPECT_EQ(m.at("reconnects").to_number<int>(), 0);
+    const auto metrics = rig.request("GET", "/metrics").body;
+    EXPECT_THAT(metrics, HasSubstr("canopen_gateway_mqtt_broker_connected{uri=\"tcp://127.0.0.1:1\"} 0\n"));
+    EXPECT_THAT(metrics, HasSubstr("canopen_gateway_mqtt_broker_connected{uri=\"tcp://127.0.0.1:2\"} 0\n"));
+  }
+  std::filesystem::remove_all(queue);
 }
 
 }  // namespace

@@ -215,6 +215,33 @@ TEST_F(EdgeClientTest, BdSeqGoesUpByOneOnReconnectAndAcrossARestart) {
   EXPECT_EQ(bdseq_of(host->on_topic(kNbirth)[2]), 2);
 }
 
+// Issue 27 item 2 (contract "Brokers"): with sparkplug.uri a list, the
+// edge node goes on to the next broker when its broker goes; there it is a
+// new connection: a new NBIRTH (seq 0) with the next bdSeq, and the DBIRTH.
+// broker() names the one it is on.
+TEST_F(EdgeClientTest, FailsOverToTheNextBrokerWithANewBirthAndTheNextBdSeq) {
+  Broker standby;
+  ASSERT_TRUE(standby.start()) << standby.log();
+  Subscriber standby_host(standby.uri(), "host-b", {"spBv1.0/#"}, {});
+  ASSERT_TRUE(standby_host.connect());
+  auto c = config();
+  c.mqtt.standby_uris = {standby.uri()};
+  make(c);
+  ASSERT_TRUE(wait_messages(kNbirth, 1));
+  EXPECT_EQ(bdseq_of(host->on_topic(kNbirth)[0]), 0);
+  EXPECT_EQ(io.call([&] { return client->broker(); }), broker.uri());
+
+  broker.stop();
+  ASSERT_TRUE(eventually([&] { return standby_host.on_topic(kDbirth).size() >= 1; }, 10s)) << standby.log();
+  const auto births = standby_host.on_topic(kNbirth);
+  ASSERT_EQ(births.size(), 1u);
+  EXPECT_EQ(bdseq_of(births[0]), 1) << "the next CONNECT's bdSeq";
+  EXPECT_EQ(parse(births[0]->to_string()).seq(), 0u);
+  EXPECT_EQ(io.call([&] { return client->broker(); }), standby.uri());
+  EXPECT_EQ(io.call([&] { return client->counters().reconnects; }), 1u);
+  drop();
+}
+
 // Facts A.4.6, MQTT 3.1.1: a clean stop publishes NDEATH with the Will's
 // bdSeq, and its DISCONNECT makes the broker discard the Will: exactly one
 // NDEATH.
