@@ -59,6 +59,9 @@ Loaded load_descriptions(NetworkConfig& cfg, std::uint32_t number, const std::st
                "` lists them, as does --log-level debug)");
     }
     for (const auto& w : desc.warnings) log.debug(label + " node " + std::to_string(node.id) + " EDS: " + w);
+    // A value the file gives but nobody can read: in a DCF that entry is not
+    // written at boot, which the person who made the DCF must hear about.
+    for (const auto& w : desc.values_left_out) log.warn(label + " node " + std::to_string(node.id) + " EDS: " + w);
     out.descriptions.emplace(node.id, std::move(desc));
   };
   for (std::size_t i = 0; i < cfg.nodes.size(); ++i) {

@@ -70,11 +70,12 @@ $CALL GET "$NODE/sdo/6424/1" > "$T/sdo.out"
 grep -q '"value":1234' "$T/sdo.out" || fail "SDO read of 6424h sub 1: $(cat "$T/sdo.out")"
 pass "GET dcf again: 6424h sub 1 = $AFTER (SDO agrees)"
 
-# A file the EDS reader refuses: 400 FILE:LINE, nothing written.
-sed 's/^ParameterValue=1234/ParameterValue=lots/' "$T/node10.dcf" > "$T/bad.dcf"
+# A file the EDS reader refuses (one entry with two values; a value that
+# cannot be read is only left out): 400 FILE:LINE, nothing written.
+sed 's/^ParameterValue=1234/ParameterValue=1234\nParameterValue=4321/' "$T/node10.dcf" > "$T/bad.dcf"
 $CALL POST "$NODE/dcf" "$T/bad.dcf" > "$T/bad.out"
 head -n 1 "$T/bad.out" | grep -q '^400$' || fail "bad DCF: $(cat "$T/bad.out")"
-grep -q 'node10.dcf:[0-9]*: ParameterValue' "$T/bad.out" || fail "no FILE:LINE in: $(cat "$T/bad.out")"
+grep -q "node10.dcf:[0-9]*: key 'ParameterValue'" "$T/bad.out" || fail "no FILE:LINE in: $(cat "$T/bad.out")"
 $CALL GET "$NODE/sdo/6424/1" > "$T/sdo2.out"
 grep -q '"value":1234' "$T/sdo2.out" || fail "the refused file changed 6424h sub 1: $(tail -n 1 "$T/sdo2.out")"
 pass "a malformed DCF is 400 with FILE:LINE"

@@ -44,9 +44,9 @@ grep -q '^200 .*"eds":false' "$T/before.out" || fail "node 10 before the upload:
 pass "without an EDS node 10's TPDOs are not decoded"
 
 # A file the reader refuses: 400 FILE:LINE: reason, nothing changed.
-{ cat "$IO_EDS"; printf '\n[6001]\nParameterName=X\nObjectType=0x7\nDataType=0x0005\nAccessType=ro\nDefaultValue=0x1FF\n'; } > "$T/broken.eds"
+{ cat "$IO_EDS"; printf '\n[6001]\nParameterName=X\nObjectType=0x7\nDataType=0x0005\nAccessType=ro\nAccessType=rw\n'; } > "$T/broken.eds"
 call PUT "$NODE/eds?name=broken.eds" "$T/broken.eds" > "$T/broken.out"
-grep -q '^400 .*"detail":"broken.eds:[0-9]*: DefaultValue' "$T/broken.out" || fail "broken EDS: $(cat "$T/broken.out")"
+grep -q '^400 .*"detail":"broken.eds:[0-9]*: key .AccessType.' "$T/broken.out" || fail "broken EDS: $(cat "$T/broken.out")"
 call GET "$NODE" | grep -q '"eds":false' || fail "the refused upload changed node 10"
 pass "a broken EDS is 400 with FILE:LINE and changes nothing"
 

@@ -180,7 +180,9 @@ std::pair<std::string, std::optional<double>> split_unit(std::string_view text) 
 // ---------------------------------------------------------------------------
 // Section kinds derived from the name.
 
-enum class ObjKind { Object, Sub, Name, Value, Denotation, ObjectLinks };
+// Structure: [xxxxsubFF], the sub-index CiA 301 7.4.3 reserves for the
+// object's structure (never a dictionary entry): skipped.
+enum class ObjKind { Object, Sub, Name, Value, Denotation, ObjectLinks, Structure };
 struct ObjRef {
   ObjKind kind = ObjKind::Object;
   std::uint16_t index = 0;
@@ -220,8 +222,8 @@ std::optional<ObjRef> classify(const IniSection& s, const Diagnostics& d) {
     const auto sub = n.substr(pos + 3);
     if (!all_hex(sub)) d.fail(s.line, "malformed sub-object section name " + subject(s));
     const auto digits = significant_digits(sub);
-    if (digits.size() > 2 || hex_value(digits) > 0xFE)
-      d.fail(s.line, "section " + subject(s) + ": sub-index above 0xFE");
+    if (digits.size() > 2) d.fail(s.line, "section " + subject(s) + ": sub-index above 0xFF");
+    if (hex_value(digits) == 0xFF) return ObjRef{ObjKind::Structure, index, 0xFF};
     return ObjRef{ObjKind::Sub, index, static_cast<std::uint8_t>(hex_value(digits))};
   }
   if (all_hex(n)) return ObjRef{ObjKind::Object, object_index(n, s, d), 0};
@@ -291,7 +293,10 @@ class Builder {
   Result<Value> parse_lenient(const IniEntry& e, std::string_view text, DataType type, const std::string& label);
   // Warns once per file for a quirk that repeats on every object.
   void warn_once(const std::string& kind, std::size_t line, const std::string& text);
-  Parsed parse_object_value(const IniEntry* e, DataType type, std::string label = {});
+  // leave_out_bad: a value that cannot be read is a warning and no value
+  // (left_out()); else an EdsError.
+  Parsed parse_object_value(const IniEntry* e, DataType type, std::string label = {}, bool leave_out_bad = false);
+  Parsed left_out(Parsed p, const std::string& why);
   Value resolve_node_id(const IniEntry& e, const std::string& label, DataType type) const;
 
   // -- sections --
@@ -405,7 +410,7 @@ Value Builder::resolve_node_id(const IniEntry& e, const std::string& label, Data
   return std::move(r).value();
 }
 
-Parsed Builder::parse_object_value(const IniEntry* e, DataType type, std::string label) {
+Parsed Builder::parse_object_value(const IniEntry* e, DataType type, std::string label, bool leave_out_bad) {
   Parsed p;
   p.entry = e;
   if (e == nullptr) return p;
@@ -421,6 +426,7 @@ Parsed Builder::parse_object_value(const IniEntry* e, DataType type, std::string
   // In a string '$' is text; in a number it can only be $NODEID.
   if (e->value.find('$') != std::string::npos && !empty_is_a_value(type)) {
     if (!is_integer(type)) {
+      if (leave_out_bad) return left_out(p, "$NODEID in a value of type " + type_text(type));
       d_.fail(e->line, p.label + " '" + e->value + "': $NODEID in a value of type " + type_text(type));
     }
     if (!out_.node_id) {
@@ -431,8 +437,23 @@ Parsed Builder::parse_object_value(const IniEntry* e, DataType type, std::string
     return p;
   }
   auto r = parse_lenient(*e, e->value, type, p.label);
+  if (!r && leave_out_bad) return left_out(p, "not a valid " + type_text(type) + ": " + r.error().detail);
   if (!r) d_.fail(e->line, invalid(p.label, e->value, type, r.error().detail));
   p.value = std::move(r).value();
+  return p;
+}
+
+// A value nobody can read without guessing (a fraction on an integer, out
+// of the type's range, a typo, a vendor tool's placeholder): the rest of the
+// file is still good, so the entry goes on without it.
+Parsed Builder::left_out(Parsed p, const std::string& why) {
+  const std::string what = to_lower(p.label) == "defaultvalue" ? "no default"
+                                                               : "no value (in a DCF: not written at boot)";
+  const std::string text = p.label + " '" + p.entry->value + "' left out (" + why + "); the entry has " + what;
+  d_.warn(p.entry->line, text);
+  out_.values_left_out.push_back(d_.warnings_back());
+  p.entry = nullptr;
+  p.value.reset();
   return p;
 }
 
@@ -449,6 +470,12 @@ Result<Value> Builder::parse_lenient(const IniEntry& e, std::string_view text, D
         return again;
       }
     }
+  }
+  // TIME_OF_DAY / TIME_DIFFERENCE as one number: ms after midnight of day 0
+  // (DefaultValue=0 is the usual way to say "zero").
+  if (type == DataType::TimeOfDay || type == DataType::TimeDifference) {
+    if (auto ms = parse_value(DataType::Unsigned32, text); ms && std::get<std::uint64_t>(ms->data) < 86'400'000)
+      return Value{type, TimeOfDay{static_cast<std::uint32_t>(std::get<std::uint64_t>(ms->data)), 0}};
   }
   const auto lower = to_lower(text);
   const bool hex = lower.starts_with("0x");
@@ -656,12 +683,13 @@ void Builder::read_comments(const IniSection& s) {
 
 std::vector<std::uint16_t> Builder::read_list(const IniSection& s) {
   const IniEntry* count = nullptr;
-  std::map<std::uint64_t, const IniEntry*> entries;  // entry number -> entry
+  // entry number -> entry; a number given twice with two objects has both (parse_ini)
+  std::multimap<std::uint64_t, const IniEntry*> entries;
   for (const auto& e : s.entries) {
     if (e.lkey == "supportedobjects") {
       count = &e;
     } else if (all_dec(e.lkey) && e.lkey.size() < 6) {
-      entries[std::stoull(e.lkey)] = &e;
+      entries.emplace(std::stoull(e.lkey), &e);
     } else {
       d_.warn(e.line, "unknown key '" + e.key + "' in " + subject(s) + " ignored");
     }
@@ -709,6 +737,11 @@ void Builder::collect_object_sections() {
   for (const auto& s : ini_.sections) {
     const auto ref = classify(s, d_);
     if (!ref) continue;
+    if (ref->kind == ObjKind::Structure) {
+      d_.warn(s.line, "section " + subject(s) + " ignored: sub-index FFh is the object's structure (CiA 301 7.4.3), "
+                                               "not an entry");
+      continue;
+    }
     const int slot = ref->kind == ObjKind::Sub ? ref->sub : -1 - static_cast<int>(ref->kind);
     if (const auto [it, fresh] = seen.emplace(std::pair{ref->index, slot}, &s); !fresh) {
       d_.fail(s.line, "section " + subject(s) + " describes the same thing as " + subject(*it->second) + " (line " +
@@ -733,6 +766,8 @@ void Builder::collect_object_sections() {
         break;
       case ObjKind::Denotation:
         break;  // DCF names for the user's tools; nothing to use here
+      case ObjKind::Structure:
+        break;  // skipped above
     }
   }
   for (const auto& [index, o] : objs_) {
@@ -889,8 +924,8 @@ Template Builder::read_template(const IniSection& s, bool domain_defaults) {
 
   t.obj_flags = obj_flags(s);
   read_unit(s, t);
-  t.def = parse_object_value(s.find("defaultvalue"), t.type);
-  t.param = parse_object_value(s.find("parametervalue"), t.type);
+  t.def = parse_object_value(s.find("defaultvalue"), t.type, {}, true);
+  t.param = parse_object_value(s.find("parametervalue"), t.type, {}, true);
   check_in_limits(t, t.def);
   check_in_limits(t, t.param);
   if (t.param.entry != nullptr && !out_.is_dcf && !warned_param_in_eds_) {
@@ -1047,7 +1082,7 @@ void Builder::read_object(std::uint16_t index, const ObjSections& secs) {
       Parsed override_value;
       if (values.contains(sub)) {
         override_value =
-            parse_object_value(values.at(sub), t.type, subject(*secs.values) + " entry " + std::to_string(i));
+            parse_object_value(values.at(sub), t.type, subject(*secs.values) + " entry " + std::to_string(i), true);
         check_in_limits(t, override_value);
       }
       obj.subs.emplace(sub, finish(ti, sub, &override_value));

@@ -86,6 +86,10 @@ std::size_t first_non_utf8_line(std::string_view text) {
 }
 }  // namespace
 
+bool is_object_list(std::string_view lname) {
+  return lname == "mandatoryobjects" || lname == "optionalobjects" || lname == "manufacturerobjects";
+}
+
 IniFile parse_ini(std::string_view text, Diagnostics& diag) {
   constexpr std::string_view bom = "\xEF\xBB\xBF";
   if (text.starts_with(bom)) text.remove_prefix(bom.size());
@@ -105,10 +109,21 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
   std::map<std::string, std::size_t, std::less<>> by_name;  // lname -> position in file.sections
   IniSection* current = nullptr;
   std::size_t line_no = 0;
+  // Lines end with LF, CR LF, or CR alone (classic Mac OS files).
+  bool cr_only_warned = false;
   while (!text.empty()) {
-    const auto nl = text.find('\n');
+    const auto nl = text.find_first_of("\r\n");
     const std::string_view raw = text.substr(0, nl);
-    text.remove_prefix(nl == std::string_view::npos ? text.size() : nl + 1);
+    std::size_t skip = nl == std::string_view::npos ? text.size() : nl + 1;
+    if (nl != std::string_view::npos && text[nl] == '\r') {
+      if (nl + 1 < text.size() && text[nl + 1] == '\n') {
+        ++skip;
+      } else if (!cr_only_warned && nl + 1 < text.size()) {
+        cr_only_warned = true;
+        diag.warn(line_no + 1, "lines end with CR alone (classic Mac OS); read as line ends");
+      }
+    }
+    text.remove_prefix(skip);
     ++line_no;
 
     const std::string_view line = trim(raw);
@@ -149,7 +164,12 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
     }
 
     const auto eq = line.find('=');
-    if (eq == std::string_view::npos) diag.fail(line_no, "malformed line " + quote_cut(line) + " (no '=')");
+    if (eq == std::string_view::npos) {
+      if (current == nullptr) diag.fail(line_no, "malformed line " + quote_cut(line) + " (no '=')");
+      // A stray word in a section (a vendor's comment without ';'): no key, no value.
+      diag.warn(line_no, "line " + quote_cut(line) + " in [" + current->name + "] has no '='; ignored");
+      continue;
+    }
     const std::string_view key = trim(line.substr(0, eq));
     const std::string_view value = trim(line.substr(eq + 1));
     if (key.empty()) diag.fail(line_no, "malformed line " + quote_cut(line) + " (no key before '=')");
@@ -168,6 +188,15 @@ IniFile parse_ini(std::string_view text, Diagnostics& diag) {
           prev->value = std::string(value);
           prev->line = line_no;
         }
+        continue;
+      }
+      if (prev->value != value && is_object_list(current->lname)) {
+        // Two objects under one number (a tool that renumbered badly): the
+        // list is a set of objects, so both are taken.
+        diag.warn(line_no, "key '" + std::string(key) + "' in [" + current->name + "] repeated with another object " +
+                               quote_cut(value) + " (first " + quote_cut(prev->value) + " at line " +
+                               std::to_string(prev->line) + "); both are taken");
+        current->entries.push_back(IniEntry{std::string(key), std::move(lkey), std::string(value), line_no});
         continue;
       }
       if (prev->value != value) {

@@ -19,6 +19,7 @@ class Diagnostics {
   void warn(std::size_t line, std::string_view text);
   const std::string& file() const { return file_; }
   std::vector<std::string> take_warnings() { return std::move(warnings_); }
+  const std::string& warnings_back() const { return warnings_.back(); }  // the latest warn(); after one only
 
  private:
   std::string file_;
@@ -46,13 +47,21 @@ struct IniFile {
   std::vector<IniSection> sections;  // file order; repeated headers merged
 };
 
-// Splits the text into sections and keys. Strips a UTF-8 BOM, CR of CRLF,
-// surrounding whitespace and ';' comment lines. Throws (through diag) on a
-// malformed line, a key outside any section or a key repeated with another
-// value; warns on a repeated section header, a key repeated with the same
-// value or once empty and once not (the value wins), '#' comment lines, and
-// text that is not UTF-8 (then read as Latin-1, so every value is UTF-8).
+// Splits the text into sections and keys; lines end with LF, CR LF or CR.
+// Strips a UTF-8 BOM, surrounding whitespace and ';' comment lines. Throws
+// (through diag) on a malformed header, a line without '=' outside any
+// section, a key outside any section or a key repeated with another value
+// (except in the object lists, is_object_list()); warns on a repeated
+// section header, a key repeated with the same value or once empty and
+// once not (the value wins), a line without '=' in a section (ignored),
+// CR-only line ends, '#' comment lines, and text that is not UTF-8 (then
+// read as Latin-1, so every value is UTF-8).
 IniFile parse_ini(std::string_view text, Diagnostics& diag);
+
+// [MandatoryObjects], [OptionalObjects], [ManufacturerObjects] (lower case):
+// a key repeated there with another value is a second object, kept as a
+// second entry under the same key.
+bool is_object_list(std::string_view lname);
 
 std::string to_lower(std::string_view s);
 std::string_view trim(std::string_view s);

@@ -19,6 +19,10 @@
 // SubNumber / NrOfEntries / ObjectLinks counts that disagree with what is
 // present (what is present wins); sub-object sections of a VAR or without
 // an object section (ignored); defaults outside LowLimit/HighLimit (kept);
+// a DefaultValue or ParameterValue that cannot be read as its type (a
+// fraction on an integer, out of the type's range, a typo, a placeholder):
+// that entry has no default / no value (values_left_out); TIME_OF_DAY and
+// TIME_DIFFERENCE as a bare number of ms (0: midnight, day 0);
 // limits that contradict each other or do not fit the type (ignored); a
 // signed type's value in hex two's complement; 0x0/0x1 for 0/1 keys and
 // BOOLEAN values; inline ';' or '#' comments after numbers and '#' comment
@@ -26,12 +30,16 @@
 // pattern in hex; a DOMAIN default that is not hex (empty DOMAIN); symbolic
 // ObjectType/DataType (VAR, UNSIGNED8); CompactSubObj=255 (1..254 used); a
 // DCF NodeID of 0 or FFh (ignored); text that is not UTF-8 (read as
-// Latin-1); a key repeated with the same value, or once empty. An object
+// Latin-1); a key repeated with the same value, or once empty; lines ending
+// in CR alone (classic Mac OS); a line without '=' inside a section
+// (skipped); an object-list number given twice with two objects (both
+// taken); a [xxxxsubFF] section (the structure sub-index: skipped). An object
 // that cannot be read without guessing (unknown ObjectType, DataType or
 // AccessType, a structure type on a VAR, no sub-objects) is left out with a
-// warning. Refused with EdsError naming file and line: a malformed line, a
-// key repeated with a different value, a value that does not fit its type
-// after the repairs above, a section naming the same thing twice,
+// warning. Refused with EdsError naming file and line: a malformed line
+// (a bad section header, no key, no '=' outside any section), a
+// key repeated with a different value, a limit or count that does not fit
+// its type after the repairs above, a section naming the same thing twice,
 // CompactSubObj together with sub-object sections.
 //
 // Callers: pass the node-ID the device has on the bus whenever the file may
@@ -165,6 +173,11 @@ struct DeviceDescription {
   std::vector<std::string> comments;                                 // [Comments] Line1..LineN
   std::map<std::uint16_t, std::vector<std::uint16_t>> object_links;  // [xxxxObjectLinks]
   std::vector<std::string> warnings;                                 // harmless oddities, each "file:line: text"
+  // The DefaultValue/ParameterValue entries that could not be read and were
+  // left out (also in `warnings`), each "file:line: text": the entry has no
+  // default or no value, so a DCF's entry is not written at boot. Callers
+  // SHOULD log these louder than the other warnings.
+  std::vector<std::string> values_left_out;
   // Per sub-entry of `od`, key index << 8 | sub; see facts().
   std::map<std::uint32_t, EntryFacts> entry_facts;
   // The facts of an entry; all defaults for an entry not in the file.

@@ -228,7 +228,7 @@ TEST(AppNodeConfig, AnEdsUploadMakesTheTpdosDecodedAtOnce) {
 
   const std::string text = read_file(kIoEds);
   const auto bad = rig.run(core::NodeEdsWrite{10, text + "\n[6001]\nParameterName=X\nObjectType=0x7\nDataType=0x0005\n"
-                                                         "AccessType=ro\nDefaultValue=0x1FF\n", "io.eds"});
+                                                         "AccessType=ro\nAccessType=rw\n", "io.eds"});
   EXPECT_EQ(problem(bad).status, 400);
   EXPECT_THAT(problem(bad).detail, StartsWith("io.eds:"));
   EXPECT_EQ(rig.app->description(1, 10), nullptr) << "nothing changed";

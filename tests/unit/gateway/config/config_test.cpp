@@ -583,11 +583,11 @@ TEST(Config, EdsFlagFileIsReadEvenWithDemoAlone) {
   const auto dir = std::filesystem::temp_directory_path() / ("cfg-eds-" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto bad = (dir / "bad.eds").string();
-  std::ofstream(bad) << "[1000]\nParameterName=Device type\nDataType=0x0007\nAccessType=ro\nDefaultValue=zz\n";
+  std::ofstream(bad) << "[1000]\nParameterName=Device type\nDataType=0x0007\nAccessType=ro\nAccessType=rw\n";
   CliOptions cli;
   cli.demo = true;
   cli.eds = {{5, bad}};
-  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--eds 5=" + bad + ": " + bad + ":5: DefaultValue 'zz'"));
+  EXPECT_THAT(merge_error(Config{}, cli), HasSubstr("--eds 5=" + bad + ": " + bad + ":5: key 'AccessType' in [1000] repeated"));
   cli.eds = {{5, kEds}};
   EXPECT_NO_THROW(merge(Config{}, cli));
   std::filesystem::remove_all(dir);

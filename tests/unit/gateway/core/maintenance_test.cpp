@@ -83,10 +83,12 @@ TEST(Maintenance, DcfReadOfANodeWithoutEdsOrOfTheOwnNodeIsRefused) {
 TEST(Maintenance, AMalformedDcfIs400WithFileAndLineAndChangesNothing) {
   Rig rig;
   std::string bad = kDcf;
-  bad.replace(bad.find("ParameterValue=3"), 16, "ParameterValue=300");  // INTEGER8
+  // (A value that does not fit is left out with a warning, issue 28 item 8;
+  // one entry with two values cannot be read without guessing.)
+  bad.replace(bad.find("ParameterValue=3"), 16, "ParameterValue=3\nParameterValue=4");
   const auto r = rig.run(request(DcfApply{kDescribed, bad}));
   EXPECT_EQ(problem_of(r).status, 400);
-  EXPECT_THAT(problem_of(r).detail, HasSubstr("node5.dcf:25: ParameterValue"));
+  EXPECT_THAT(problem_of(r).detail, HasSubstr("node5.dcf:26: key 'ParameterValue'"));
   EXPECT_TRUE(rig.nets.transfers.empty() && rig.nets.pending.empty());
   EXPECT_EQ(count(rig, Counters::dcf_apply, Counters::ok) + count(rig, Counters::dcf_apply, Counters::failed), 0u);
 }

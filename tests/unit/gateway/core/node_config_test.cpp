@@ -188,10 +188,10 @@ TEST(RequestCoreNodeConfig, TheOwnNodeIsNotANodeEntry) {
 TEST(RequestCoreNodeConfig, AnEdsIsReadAsCanopenEdsCheckReadsIt_Cia306) {
   Rig rig;
   const std::string broken = std::string(kGoodEds) + "[6000]\nParameterName=In\nObjectType=0x7\nDataType=0x0005\n"
-                                                      "AccessType=ro\nDefaultValue=0x1FF\n";
+                                                      "AccessType=ro\nAccessType=rw\n";
   const auto bad = rig.run(NodeEdsWrite{5, broken, "vendor.eds"});
   EXPECT_EQ(problem(bad).status, 400);
-  EXPECT_THAT(problem(bad).detail, ::testing::StrEq("vendor.eds:20: DefaultValue '0x1FF' is not a valid UNSIGNED8: 0x1FF is above 255 (u8)"));
+  EXPECT_THAT(problem(bad).detail, ::testing::StrEq("vendor.eds:20: key 'AccessType' in [6000] repeated with a different value: 'ro' at line 19, 'rw' here"));
   EXPECT_EQ(rig.settings.writes, 0);
   EXPECT_TRUE(rig.audited("node configuration refused: alice: net 1 node 5: EDS/DCF vendor.eds uploaded: 400"));
   EXPECT_EQ(problem(rig.run(NodeEdsWrite{5, "", ""})).detail, "node5.eds: empty: the body is the EDS or DCF file");

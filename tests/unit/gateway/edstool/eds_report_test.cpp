@@ -64,13 +64,13 @@ TEST(EdsCheck, ControlCharactersInTheFileAreEscaped) {
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(file.c_str(), "w"), &std::fclose);
     ASSERT_TRUE(f);
     std::fputs("[1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\nAccessType=ro\n"
-               "DefaultValue=0x12\x1b[2J\n",
+               "AccessType=r\x1b[2J\n",
                f.get());
   }
   const auto r = check_file(file, 5);
   EXPECT_FALSE(r.accepted);
   ASSERT_EQ(r.lines.size(), 1u);
-  EXPECT_THAT(r.lines[0], StartsWith(file + ":6: error: DefaultValue '0x12\\x1B[2J'"));
+  EXPECT_THAT(r.lines[0], StartsWith(file + ":6: error: key 'AccessType' in [1000] repeated with a different value: 'ro' at line 5, 'r\\x1B[2J' here"));
   EXPECT_EQ(r.lines[0].find('\x1b'), std::string::npos) << r.lines[0];
   std::filesystem::remove(file);
 }

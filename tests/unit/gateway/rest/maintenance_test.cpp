@@ -125,9 +125,9 @@ TEST(RestMaintenance, DcfApplyRoundTrip) {
 TEST(RestMaintenance, ABadDcfIs400WithFileAndLineAndAPlainTextBodyIs415) {
   RestRig rig;
   auto bad = rig.request("POST", kNode10 + "/dcf", "[1017]\nParameterName=x\nObjectType=0x7\nDataType=0x0006\n"
-                                                   "AccessType=rw\nParameterValue=banana\n", kOctets);
+                                                   "AccessType=rw\nParameterValue=1\nParameterValue=2\n", kOctets);
   EXPECT_EQ(bad.status, 400) << bad.body;
-  EXPECT_THAT(bad.body, HasSubstr("node10.dcf:6: "));
+  EXPECT_THAT(bad.body, HasSubstr("node10.dcf:7: "));
   // A text/plain body is what a cross-site form can send: refused before the route.
   auto text = rig.request("POST", kNode10 + "/dcf", "[1017]\n", {"Content-Type: text/plain"});
   EXPECT_EQ(text.status, 415);

@@ -57,7 +57,7 @@ TEST(NodeConfigRest, SettingsAndEdsOverHttp) {
 
   const auto eds_bad = rig.request("PUT", base + "/eds?name=vendor.eds",
                                    io_eds() + "\n[6001]\nParameterName=X\nObjectType=0x7\nDataType=0x0005\n"
-                                              "AccessType=ro\nDefaultValue=0x1FF\n",
+                                              "AccessType=ro\nAccessType=rw\n",
                                    {"Content-Type: application/octet-stream"});
   EXPECT_EQ(eds_bad.status, 400);
   EXPECT_EQ(std::string(eds_bad.json().at("detail").as_string()).substr(0, 11), "vendor.eds:");

@@ -423,10 +423,13 @@ TEST(EdsCorpus, AcceptsEveryUnambiguousVendorFile) {
     }
   }
   EXPECT_GE(accepted + refused.size(), 219u);
-  // 209 of 219 today (python-canopen loads 86%); the refusals are listed so a
-  // change in either direction is seen.
-  EXPECT_GE(accepted, 209u);
-  EXPECT_LE(refused.size(), 10u) << [&] {
+  // 214 of 219 today (209 before issue 28 left unreadable values out instead
+  // of refusing the file; python-canopen loads 86%); the refusals are listed
+  // so a change in either direction is seen: four keys repeated with another
+  // value outside the object lists (two names for one object) and one
+  // DataType that is a comment.
+  EXPECT_GE(accepted, 214u);
+  EXPECT_LE(refused.size(), 5u) << [&] {
     std::string all;
     for (const auto& r : refused) all += r + "\n";
     return all;

@@ -290,19 +290,31 @@ TEST(EdsNodeId, ResultMustFitTheType) {
 }
 
 TEST(EdsNodeId, MalformedExpressions) {
-  for (const std::string bad : {"$NODEID*2", "$NODEID+$NODEID", "$NODE+1", "$NODEID+", "$NODEID-1", "0x180+"}) {
+  for (const std::string bad : {"$NODEID*2", "$NODEID+$NODEID", "$NODE+1", "$NODEID+", "$NODEID-1"}) {
     const auto text = cob_id_object(bad);
     const auto e = parse_error(text, 5);
     EXPECT_EQ(e.line(), line_of(text, "DefaultValue=" + bad)) << bad << ": " << e.what();
   }
+  // Without $NODEID it is just a number that cannot be read (issue 28 item
+  // 8): the entry has no default, the rest of the file is read.
+  const auto text = cob_id_object("0x180+");
+  const auto d = parse(text, 5);
+  EXPECT_TRUE(has_warning(d, "DefaultValue '0x180+' left out")) << text;
+  ASSERT_EQ(d.values_left_out.size(), 1u);
+  EXPECT_NE(d.values_left_out[0].find(":" + std::to_string(line_of(text, "DefaultValue=0x180+")) + ": "),
+            std::string::npos)
+      << d.values_left_out[0];
 }
 
 TEST(EdsNodeId, OnlyForIntegers) {
   const auto text =
       file_with("[2000]\nParameterName=x\nDataType=0x0008\nAccessType=rw\nDefaultValue=$NODEID\n", {0x2000});
-  const auto e = parse_error(text, 5);
-  EXPECT_EQ(e.line(), line_of(text, "DefaultValue=$NODEID"));
-  EXPECT_NE(e.reason().find("REAL32"), std::string::npos) << e.what();
+  // Issue 28 item 8: a value that cannot be read leaves the entry without
+  // a default, with a warning, instead of refusing the file.
+  const auto bad = parse(text, 5);
+  EXPECT_TRUE(has_warning(bad, "DefaultValue '$NODEID' left out ($NODEID in a value of type REAL32)"));
+  ASSERT_NE(bad.od.find(0x2000, 0), nullptr);
+  EXPECT_FALSE(bad.od.find(0x2000, 0)->default_value.has_value());
   // In a string '$' is just text.
   const auto d =
       parse(file_with("[2001]\nParameterName=s\nDataType=0x0009\nAccessType=rw\nDefaultValue=costs $5\n", {0x2001}));

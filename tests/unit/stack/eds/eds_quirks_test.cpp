@@ -6,6 +6,7 @@
 // guessing (CiA 306, as eds.hpp states the rules).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "eds_test_util.hpp"
@@ -257,6 +258,89 @@ TEST(EdsQuirk, ObjectsThatCannotBeReadAreLeftOut) {
   }
   EXPECT_NE(q.d.od.find(0x2000, 0), nullptr);
   EXPECT_EQ(at(q, 0x2005, 1).type, DataType::Unsigned32);
+}
+
+// Issue 28 item 8: a DefaultValue or ParameterValue nobody can read (a
+// fraction on an INTEGER32, out of the type's range, a typo, a vendor
+// tool's placeholder) leaves that entry without a default / without a value
+// and the rest of the file is read; a DCF's entry is then not written at
+// boot (no ParameterValue fact), which values_left_out says louder.
+// DefaultValue=0 on a TIME_OF_DAY is valid: midnight of day 0.
+TEST(EdsQuirk, ValuesThatCannotBeReadAreLeftOutNotTheFile) {
+  const auto q = load_quirk("bad-values.dcf");
+  expect_warning(q, "DefaultValue=3.141593", "DefaultValue '3.141593' left out (not a valid INTEGER32");
+  expect_warning(q, "DefaultValue=0x40500108", "DefaultValue '0x40500108' left out (not a valid UNSIGNED8");
+  expect_warning(q, "ParameterValue=0xFFFF0192",
+                 "ParameterValue '0xFFFF0192' left out (not a valid UNSIGNED16: ");
+  expect_warning(q, "ParameterValue=0xFFFF0192", "no value (in a DCF: not written at boot)");
+  expect_warning(q, "DefaultValue=4x0", "DefaultValue '4x0' left out");
+  expect_warning(q, "DefaultValue=<!flux", "DefaultValue '<!flux_map_td1.10.6>' left out");
+  EXPECT_EQ(q.d.values_left_out.size(), 5u);
+  for (const std::uint16_t index : {std::uint16_t{0x2000}, std::uint16_t{0x2001}, std::uint16_t{0x2003}, std::uint16_t{0x2004}}) {
+    EXPECT_FALSE(at(q, index, 0).default_value.has_value()) << std::hex << index;
+    EXPECT_EQ(at(q, index, 0).value, Value::zero(at(q, index, 0).type)) << std::hex << index;
+  }
+  // 2002: its DefaultValue stands, its ParameterValue is gone.
+  EXPECT_EQ(u(at(q, 0x2002, 0).value), 100u);
+  EXPECT_FALSE(q.d.facts(0x2002, 0).parameter_value);
+  EXPECT_TRUE(q.d.facts(0x2006, 0).parameter_value);
+  EXPECT_EQ(u(at(q, 0x2006, 0).value), 250u);
+  EXPECT_EQ(at(q, 0x2005, 0).value, (Value{DataType::TimeOfDay, TimeOfDay{0, 0}}));
+  for (const auto& w : q.d.warnings) EXPECT_EQ(w.find("2005"), std::string::npos) << "TIME_OF_DAY 0 is no slip: " << w;
+}
+
+// Issue 28 item 8: a CompactSubObj [xxxxValue] entry that does not fit the
+// type is left out like a ParameterValue: that sub-object keeps its default.
+TEST(EdsQuirk, CompactValueEntryThatCannotBeReadIsLeftOut) {
+  const std::string text = file_with(
+      "[2000]\nParameterName=r\nObjectType=0x8\nDataType=0x0005\nAccessType=rw\nDefaultValue=3\n"
+      "CompactSubObj=2\n[2000Value]\nNrOfEntries=2\n1=9\n2=300\n",
+      {0x2000});
+  const auto d = parse(text);
+  EXPECT_TRUE(has_warning(d, "test.eds:" + std::to_string(line_of(text, "2=300")) + ": [2000Value] entry 2 '300' left out"));
+  EXPECT_EQ(u(d.od.find(0x2000, 1)->value), 9u);
+  EXPECT_EQ(u(d.od.find(0x2000, 2)->value), 3u);
+  EXPECT_FALSE(d.facts(0x2000, 2).parameter_value);
+}
+
+// Issue 28 items 9, 10, 11, 12: a stray word in a section (no '='), an
+// object-list number given twice with two objects (both are taken), and a
+// [xxxxsubFF] section (the structure sub-index, CiA 301 7.4.3: skipped).
+TEST(EdsQuirk, StrayLinesTwiceNumberedObjectsAndSubFF) {
+  const auto q = load_quirk("stray-lines.eds");
+  expect_warning(q, "reserved", "line 'reserved' in [1000] has no '='; ignored");
+  expect_warning(q, "2=0x2002", "key '2' in [OptionalObjects] repeated with another object '0x2002'");
+  expect_warning(q, "[2000subFF]", "sub-index FFh is the object's structure");
+  EXPECT_EQ(q.d.optional_objects, (std::vector<std::uint16_t>{0x2000, 0x2001, 0x2002}));
+  EXPECT_EQ(u(at(q, 0x2002, 0).value), 2u);
+  EXPECT_EQ(q.d.od.find(0x2000)->subs.size(), 2u);
+  EXPECT_EQ(q.d.od.find(0x2000, 0xFF), nullptr);
+  EXPECT_EQ(u(at(q, 0x2000, 1).value), 7u);
+}
+
+// Issue 28 item 9: classic Mac OS line ends (CR alone) are line ends, as
+// LF and CR LF are: the same file with each reads the same.
+TEST(EdsQuirk, CrOnlyLineEndsAreLineEnds) {
+  const auto path = test_data("quirks") / "stray-lines.eds";
+  const auto lf = read_text(path);
+  std::string cr = lf, crlf;
+  std::replace(cr.begin(), cr.end(), '\n', '\r');
+  for (char c : lf) {
+    if (c == '\n') crlf += '\r';
+    crlf += c;
+  }
+  const auto a = parse(lf), b = parse(cr), c = parse(crlf);
+  EXPECT_EQ(b.optional_objects, a.optional_objects);
+  EXPECT_EQ(c.optional_objects, a.optional_objects);
+  for (const auto* d : {&b, &c}) {
+    ASSERT_EQ(d->od.objects().size(), a.od.objects().size());
+    EXPECT_EQ(u(d->od.find(0x2000, 1)->value), 7u);
+    EXPECT_EQ(d->file.file_name, "stray-lines.eds");
+  }
+  EXPECT_TRUE(has_warning(b, "test.eds:1: lines end with CR alone"));
+  EXPECT_FALSE(has_warning(c, "CR alone"));
+  // The line numbers in messages count CR line ends.
+  EXPECT_TRUE(has_warning(b, "test.eds:" + std::to_string(line_of(lf, "reserved")) + ": line 'reserved'"));
 }
 
 }  // namespace
