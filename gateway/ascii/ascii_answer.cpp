@@ -16,6 +16,12 @@ std::string error_response(std::uint32_t seq, Error e) {
          std::string(error_text(e)) + "\r\n";
 }
 
+std::string role_refusal(std::uint32_t seq, std::string_view detail) {
+  return "[" + std::to_string(seq) + "] ERROR:" + std::to_string(static_cast<unsigned>(Error::RequestNotSupported)) +
+         " #" + std::string(error_text(Error::RequestNotSupported)) + " " + std::string(detail) +
+         "; ascii.role in the gateway's configuration sets the role of ASCII clients\r\n";
+}
+
 std::string abort_response(std::uint32_t seq, std::uint32_t abort_code) {
   return "[" + std::to_string(seq) + "] ERROR:" + printf_string("0x%08lX", static_cast<unsigned long>(abort_code)) +
          " #" + std::string(canopen::sdo_abort_text(abort_code)) + "\r\n";

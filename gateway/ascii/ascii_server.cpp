@@ -95,8 +95,8 @@ asio::ip::tcp::endpoint tcp_endpoint(const Protocol::endpoint& ep) {
 std::string problem_text(std::uint32_t seq, const core::Problem& p) {
   if (p.abort_code) return abort_response(seq, *p.abort_code);
   switch (p.status) {
-    case 401:
-    case 403: return error_response(seq, Error::RequestNotSupported);  // not for this client's role
+    case 401: return role_refusal(seq, "the ASCII clients' role is none");
+    case 403: return role_refusal(seq, p.detail);  // not for this client's role
     case 404: return error_response(seq, Error::UnsupportedNet);
     case 400: return abort_response(seq, 0x06090030);  // a value the node's EDS/DCF does not allow
     default: return error_response(seq, Error::InternalState);  // 429 queue share, 503 bus down, ...

@@ -172,7 +172,11 @@ struct AsciiConfig {
   // "--ascii 0.0.0.0:60000", "gw.yaml:40: ascii.listen 0.0.0.0:60000", for messages (merge()).
   std::string listen_origin;
   bool allow_remote = false;
-  Role role = Role::Operator;  // what every ASCII client may do
+  // What every ASCII client may do: ascii.role, or by default REST's
+  // tokenless rule (merge()): admin when no tokens are configured and the
+  // socket is loopback or unix only, else operator.
+  Role role = Role::Operator;
+  bool role_set = false;  // ascii.role was given
   std::chrono::seconds idle_timeout{300};  // 0 = never closed for idleness
   std::size_t max_clients = 16;
 };

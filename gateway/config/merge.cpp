@@ -164,6 +164,10 @@ Config merge(Config c, const CliOptions& cli) {
       throw ConfigError(c.ascii.listen_origin +
                         ": not a loopback address or unix socket, and the ASCII interface has no authentication of "
                         "its own; set ascii.allow-remote: true to accept that (and limit who reaches the port)");
+    // As REST without tokens: every local process is admin (cocomm's reset
+    // and lss_* commands work out of the box); with tokens, or reachable
+    // from elsewhere, operator unless ascii.role says otherwise.
+    if (!c.ascii.role_set) c.ascii.role = c.http.tokens.empty() && a->local() ? Role::Admin : Role::Operator;
   }
   // The server binds an address, it does not resolve names; "localhost" is
   // the one name everybody means the same by.

@@ -197,6 +197,18 @@ void RequestCore::lss(Context& c, const Command& cmd) {
       },
       cmd);
   if (!planned) return c.done(problem(500, "not an LSS command"));
+  // CiA 305: configure, store, activate and inquire address the device in
+  // configuration state; with none there is nobody to wait for.
+  const bool needs_selected = std::holds_alternative<LssSetNodeId>(cmd) ||
+                              std::holds_alternative<LssSetBitTiming>(cmd) ||
+                              std::holds_alternative<LssActivateBitTiming>(cmd) ||
+                              std::holds_alternative<LssStore>(cmd) || std::holds_alternative<LssInquire>(cmd);
+  if (needs_selected && !lss_selected_[c.network]) {
+    ++counters_.lss_refused;
+    return c.done(problem(409, "no device is in LSS configuration state on network " + std::to_string(c.network) +
+                                   ": select one first (switch state selective, switch state global configuration, "
+                                   "or a fastscan)"));
+  }
   lss_busy_[c.network] = true;
   lss_next(std::move(run));
 }
@@ -215,6 +227,14 @@ void RequestCore::lss_next(std::shared_ptr<LssRun> run) {
   run->steps.pop_front();
   auto ec = net_.lss(run->c.network, step, [this, run, step](const LssOutcome& o) {
     using S = LssOutcome::Status;
+    // Which device is in configuration state, as far as the gateway's own
+    // services tell.
+    bool& selected = lss_selected_[run->c.network];
+    if (const auto* g = std::get_if<LssSwitchGlobal>(&step)) {
+      if (o.status == S::ok) selected = g->configuration;
+    } else if (std::holds_alternative<LssSwitchSelective>(step) || std::holds_alternative<LssFastscan>(step)) {
+      selected = o.status == S::ok;
+    }
     if (run->cleaning_up) return lss_next(run);  // its outcome changes nothing: the answer is the failure
     if (o.status != S::ok) {
       const bool assign_all = std::holds_alternative<LssAssignAll>(run->cmd);

@@ -293,6 +293,10 @@ class RequestCore {
   auth::QueueShares shares_;
   Counters counters_;
   std::map<std::uint32_t, bool> lss_busy_;                          // per network
+  // Per network: a device (or all, switch global) is in LSS configuration
+  // state by the gateway's last switch or fastscan (CiA 305: the
+  // configuration services need one).
+  std::map<std::uint32_t, bool> lss_selected_;
   std::map<std::uint32_t, std::vector<LssDeviceSeen>> lss_found_;  // per network: the last scan's finds
   std::map<std::uint64_t, bool> maintenance_busy_;                  // per sdo_queue_key: one transfer per node
 };

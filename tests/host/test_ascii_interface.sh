@@ -53,7 +53,7 @@ print(d.get("state", ""))
 
 # ---- 1: the start-up line ------------------------------------------------------
 start_gateway --demo --http 127.0.0.1:0 --ascii 127.0.0.1:0
-wait_for "$GW_LOG" "CiA 309-3 ASCII on 127\.0\.0\.1:[0-9]+ \(this machine only; clients act as operator\)"
+wait_for "$GW_LOG" "CiA 309-3 ASCII on 127\.0\.0\.1:[0-9]+ \(this machine only; clients act as admin\)"
 WHERE=$(sed -n 's/.*CiA 309-3 ASCII on \(127\.0\.0\.1:[0-9]*\) .*/\1/p' "$GW_LOG" | head -1)
 HTTP=$(sed -n 's|.*HTTP/WebSocket on http://\([^ ]*\) .*|\1|p' "$GW_LOG" | head -1)
 [ -n "$WHERE" ] && [ "${WHERE##*:}" != 0 ] || fail "no bound ASCII port in: $(grep ASCII "$GW_LOG")"
@@ -82,6 +82,26 @@ grep -q '^\[6\] ERROR:0x06020000 #' "$T/a4" || fail "SDO abort: $(cat "$T/a4")"
 grep -q '^\[7\] ERROR:100 #Request not supported\.' "$T/a4" || fail "unknown command: $(cat "$T/a4")"
 grep -q '^\[7\] ERROR:101 #Syntax error\.' "$T/a4" || fail "no sequence: $(cat "$T/a4")"
 pass "errors: $(tr -d '\r' < "$T/a4" | tr '\n' '|')"
+
+# Issue 28 items 6 and 7: no tokens and a loopback port, so admin as REST is:
+# cocomm's reset node works; lss_store with nothing selected is ERROR:102 at once.
+printf '[8] 5 reset node\n[9] lss_store\n' | ascii "$WHERE" > "$T/a5"
+printf '[8] OK\r\n[9] ERROR:102 #Request not processed due to internal state.\r\n' | cmp -s - "$T/a5" ||
+  fail "reset node / lss_store: $(cat "$T/a5")"
+wait_for "$GW_LOG" "node 5 boot-up" 20
+pass "default role admin: reset node OK, lss_store with nothing selected ERROR:102"
+stop_gateway
+
+# With tokens, the default is operator and a refusal says which role and key.
+HASH=$(printf 'secret' | sha256sum | cut -d' ' -f1)
+printf 'http:\n  tokens:\n    - {name: t, role: admin, sha256: %s}\n' "$HASH" > "$T/tokens.yaml"
+start_gateway --config "$T/tokens.yaml" --demo --http 127.0.0.1:0 --ascii 127.0.0.1:0
+wait_for "$GW_LOG" "clients act as operator\)"
+WHERE=$(sed -n 's/.*CiA 309-3 ASCII on \(127\.0\.0\.1:[0-9]*\) .*/\1/p' "$GW_LOG" | head -1)
+printf '[1] 5 reset node\n' | ascii "$WHERE" > "$T/a6"
+grep -q '^\[1\] ERROR:100 #Request not supported\. role operator may not do this (needs admin); ascii\.role' "$T/a6" ||
+  fail "refusal by role: $(cat "$T/a6")"
+pass "with tokens: operator, refusal: $(tr -d '\r' < "$T/a6")"
 stop_gateway
 
 # ---- 3: a unix socket ---------------------------------------------------------------

@@ -3,7 +3,7 @@
 // a node-ID (LSS address 5A1h 8822h 10003h 55000001h): every lss_* command
 // through the request core's LSS commands, answers and error codes as
 // CANopenNode's gateway writes them (facts B.1), roles as the contract says
-// (LSS needs admin; the default ascii.role is operator).
+// (LSS needs admin, and a refusal says so).
 #include "ascii/ascii_lss.hpp"
 
 #include <gmock/gmock.h>
@@ -15,6 +15,7 @@ namespace gateway::ascii {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::StartsWith;
 using test::Rig;
 
 const std::string kNewDevice = "0x000005A1 0x00008822 0x00010003 0x55000001";
@@ -67,14 +68,34 @@ TEST(AsciiLss, AllNodesListsEachAssignmentThenTheCount) {
             "[3] ERROR:100 #Request not supported.\r\n");
 }
 
-TEST(AsciiLss, LssNeedsAdminAndTheDefaultRoleIsOperator) {
-  Rig rig;  // ascii.role default: operator
+TEST(AsciiLss, LssNeedsAdminAndTheRefusalNamesTheRoleAndAsciiRole) {
+  Rig rig;  // role operator: what the default is once tokens exist or the port is remote
   rig.server->set_lss_handler(make_lss_handler(rig.app->requests()));
   auto c = rig.connect();
-  EXPECT_EQ(rig.exchange(*c, "[1] _lss_fastscan\n", 1), "[1] ERROR:100 #Request not supported.\r\n");
-  EXPECT_EQ(rig.exchange(*c, "[2] lss_switch_glob 1\n", 1), "[2] ERROR:100 #Request not supported.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[1] _lss_fastscan\n", 1), "[1] ERROR:100 #Request not supported. role operator may not do this (needs admin); ascii.role in the gateway's configuration sets the role of ASCII clients\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[2] lss_switch_glob 1\n", 1), "[2] ERROR:100 #Request not supported. role operator may not do this (needs admin); ascii.role in the gateway's configuration sets the role of ASCII clients\r\n");
   rig.log->flush();
   EXPECT_THAT(rig.memlog.text(), HasSubstr("auth failure: ascii 127.0.0.1:"));
+}
+
+// Issue 28 item 7, contract "ASCII": the commands that address the selected
+// device answer ERROR:102 at once when none is selected, as CANopenNode's
+// gateway does (it used to wait for the LSS time-out: ERROR:103).
+TEST(AsciiLss, CommandsThatNeedASelectedDeviceAreError102AtOnceWithoutOne) {
+  LssRig rig;
+  auto c = rig.connect();
+  const auto started = std::chrono::steady_clock::now();
+  EXPECT_EQ(rig.exchange(*c, "[1] lss_store\n", 1), "[1] ERROR:102 #Request not processed due to internal state.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[2] lss_set_node 30\n", 1), "[2] ERROR:102 #Request not processed due to internal state.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[3] lss_conf_bitrate 0 2\n", 1), "[3] ERROR:102 #Request not processed due to internal state.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[4] lss_activate_bitrate 100\n", 1), "[4] ERROR:102 #Request not processed due to internal state.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[5] lss_inquire_addr\n", 1), "[5] ERROR:102 #Request not processed due to internal state.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[6] lss_get_node\n", 1), "[6] ERROR:102 #Request not processed due to internal state.\r\n");
+  EXPECT_LT(std::chrono::steady_clock::now() - started, std::chrono::seconds(1)) << "no LSS time-out waited";
+  EXPECT_EQ(rig.exchange(*c, "[7] lss_switch_glob 1\n", 1), "[7] OK\r\n");
+  EXPECT_THAT(rig.exchange(*c, "[8] lss_get_node\n", 1), StartsWith("[8] 0x")) << "selected: the first to answer";
+  EXPECT_EQ(rig.exchange(*c, "[9] lss_switch_glob 0\n", 1), "[9] OK\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[10] lss_store\n", 1), "[10] ERROR:102 #Request not processed due to internal state.\r\n");
 }
 
 }  // namespace

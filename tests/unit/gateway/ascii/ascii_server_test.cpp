@@ -85,8 +85,10 @@ TEST(AsciiServer, NmtCommandsReachTheNode) {
   EXPECT_TRUE(rig.run_until([&] { return rig.in_state(5, canopen::NmtState::PreOperational); }));
   EXPECT_EQ(rig.exchange(*c, "[3] 5 start\n", 1), "[3] OK\r\n");
   EXPECT_TRUE(rig.run_until([&] { return rig.operational(5); }));
-  // Reset node needs admin (core::required_role); the default ASCII role is operator.
-  EXPECT_EQ(rig.exchange(*c, "[4] 5 reset node\n", 1), "[4] ERROR:100 #Request not supported.\r\n");
+  // Reset node needs admin (core::required_role); the rig's role is operator
+  // (with tokens or a remote port, the default): the refusal says why.
+  EXPECT_EQ(rig.exchange(*c, "[4] 5 reset node\n", 1),
+            "[4] ERROR:100 #Request not supported. role operator may not do this (needs admin); ascii.role in the gateway's configuration sets the role of ASCII clients\r\n");
 }
 
 TEST(AsciiServer, DefaultsArePerConnection) {
@@ -284,8 +286,10 @@ TEST(AsciiServer, AViewerMayReadButNotWrite) {
   auto c = rig.connect();
   const std::string before = rig.exchange(*c, "[1] 5 r 0x1017 0 u16\n", 1);
   EXPECT_THAT(before, StartsWith("[1] "));
-  EXPECT_EQ(rig.exchange(*c, "[2] 5 w 0x1017 0 u16 1234\n", 1), "[2] ERROR:100 #Request not supported.\r\n");
-  EXPECT_EQ(rig.exchange(*c, "[3] 5 stop\n", 1), "[3] ERROR:100 #Request not supported.\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[2] 5 w 0x1017 0 u16 1234\n", 1),
+            "[2] ERROR:100 #Request not supported. role viewer may not do this (needs operator); ascii.role in the gateway's configuration sets the role of ASCII clients\r\n");
+  EXPECT_EQ(rig.exchange(*c, "[3] 5 stop\n", 1),
+            "[3] ERROR:100 #Request not supported. role viewer may not do this (needs operator); ascii.role in the gateway's configuration sets the role of ASCII clients\r\n");
   EXPECT_EQ(rig.exchange(*c, "[1] 5 r 0x1017 0 u16\n", 1), before) << "nothing was written";
   EXPECT_TRUE(rig.operational(5)) << "nothing was stopped";
 }

@@ -724,7 +724,7 @@ TEST(Config, AsciiKeysReachTheirFields) {
   const Config defaults = merge(parse_config("ascii: {}\n", "gw.yaml"), cli);
   EXPECT_TRUE(defaults.ascii.enabled);
   EXPECT_EQ(defaults.ascii.listen, "127.0.0.1:60000");
-  EXPECT_EQ(defaults.ascii.role, Role::Operator) << "contract: ascii.role default operator";
+  EXPECT_EQ(defaults.ascii.role, Role::Admin) << "contract: no tokens and a local socket: admin, as REST";
   CliOptions flag = cli;
   flag.ascii = "127.0.0.1:0";
   const Config f = merge(parse_config("ascii: {listen: 127.0.0.1:60001}\n", "gw.yaml"), flag);
@@ -733,6 +733,25 @@ TEST(Config, AsciiKeysReachTheirFields) {
 }
 
 // The socket has no authentication of its own: off loopback/unix only with
+// Issue 28 item 6: ascii.role's default follows REST's tokenless rule
+// (contract "ASCII"): admin with no tokens on a loopback or unix socket,
+// operator once tokens exist or the port is reachable from elsewhere; a
+// role given explicitly always wins.
+TEST(Config, AsciiRoleDefaultFollowsRestsTokenlessRule) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0"};
+  const auto role = [&](const std::string& yaml) { return merge(parse_config(yaml, "gw.yaml"), cli).ascii.role; };
+  EXPECT_EQ(role("ascii: {listen: unix:/run/gw/ascii.sock}\n"), Role::Admin);
+  EXPECT_EQ(role("ascii: {listen: 127.0.0.1:60000}\n"), Role::Admin);
+  const std::string tokens =
+      "http:\n  tokens:\n    - {name: ops, role: operator, sha256: "
+      "9f86d081884c7d659a2feaa0c55ad015a3bf4f1b2b0b822cd15d6c15b0f00a08}\n";
+  EXPECT_EQ(role(tokens + "ascii: {}\n"), Role::Operator) << "tokens: the ASCII port has none, so not admin";
+  EXPECT_EQ(role("ascii: {listen: 0.0.0.0:60000, allow-remote: true}\n"), Role::Operator) << "reachable remotely";
+  EXPECT_EQ(role("ascii: {role: viewer}\n"), Role::Viewer);
+  EXPECT_EQ(role(tokens + "ascii: {role: admin}\n"), Role::Admin) << "explicit wins";
+}
+
 // ascii.allow-remote: true, refused otherwise with where the address came from.
 TEST(Config, AsciiOffLoopbackNeedsAllowRemote) {
   CliOptions cli;

@@ -419,6 +419,14 @@ TEST(RequestCoreLss, ConfigureOfAnAbsentDeviceIs504AndSetsNothing) {
 
 // CiA 305 error codes of configure node-ID and store (facts C.1) as 422
 // with their meaning, and the network free again afterwards.
+// CiA 305: the configuration services address the device in configuration
+// state; these put every device there, as `lss_switch_glob 1` does.
+void select_all(Rig& rig) {
+  auto r = rig.run(request(LssSwitchGlobal{true}));
+  rig.nets.lss_answer();
+  ASSERT_TRUE(r && r->has_value());
+}
+
 TEST(RequestCoreLss, ASlaveErrorIs422WithItsCia305Meaning) {
   Rig rig;
   auto r = rig.run(request(LssConfigure{kDev, 42, {}, true}));
@@ -433,6 +441,7 @@ TEST(RequestCoreLss, ASlaveErrorIs422WithItsCia305Meaning) {
   EXPECT_EQ(problem_of(r).status, 422);
   EXPECT_EQ(problem_of(r).lss_error, LssError::store_media_error);
   EXPECT_EQ(problem_of(r).detail, "the device refused store configuration: storage media access error (error code 2)");
+  select_all(rig);
   r = rig.run(request(LssSetNodeId{100}));
   refused.error = 1;
   rig.nets.lss_answer(refused);
@@ -518,11 +527,13 @@ TEST(RequestCoreLss, BadArgumentsAre400AndSendNothing) {
   EXPECT_EQ(problem_of(rig.run(request(LssAssignAll{0, true, {}}))).status, 400);
   EXPECT_EQ(problem_of(rig.run(request(LssSetNodeId{128}))).status, 400);
   EXPECT_TRUE(rig.nets.lss_pending.empty());
+  select_all(rig);
   EXPECT_FALSE(rig.run(request(LssSetNodeId{0xFF}))->has_value()) << "FFh unconfigures (facts C.1)";
 }
 
 TEST(RequestCoreLss, InquireWithoutAPartAsksForAllFour) {
   Rig rig;
+  select_all(rig);
   const auto r = rig.run(request(LssInquire{}));
   std::vector<LssStep> steps;
   for (std::uint32_t v : {0xABCDu, 0x401u, 2u, 1001u}) {
@@ -548,11 +559,44 @@ TEST(RequestCoreLss, BusOffIs503WhenAskedAndAMasterThatCannotSendIs503) {
   req.check_bus = true;
   EXPECT_EQ(problem_of(rig.run(req)).status, 503);
   rig.nets.bus = canopen::can::BusState::ErrorActive;
+  select_all(rig);
   rig.nets.lss_refuse = std::make_error_code(std::errc::no_buffer_space);
   const auto r = rig.run(request(LssStore{}));
   EXPECT_EQ(problem_of(r).status, 503);
   rig.nets.lss_refuse = {};
   EXPECT_FALSE(rig.run(request(LssStore{}))->has_value()) << "not left held";
+}
+
+// Issue 28 item 7: with no device in configuration state, store, configure,
+// activate and inquire are refused at once (409; ASCII ERROR:102 as
+// CANopenNode) instead of waiting for an answer nobody will send.
+TEST(RequestCoreLss, ConfigurationServicesWithNothingSelectedAre409AtOnce) {
+  Rig rig;
+  const auto refused = [&](Request req) {
+    const auto r = rig.run(std::move(req));
+    EXPECT_TRUE(rig.nets.lss_pending.empty()) << "nothing reached the bus";
+    return problem_of(r).status;
+  };
+  EXPECT_EQ(refused(request(LssStore{})), 409);
+  EXPECT_EQ(refused(request(LssSetNodeId{5})), 409);
+  EXPECT_EQ(refused(request(LssSetBitTiming{0, 2})), 409);
+  EXPECT_EQ(refused(request(LssActivateBitTiming{100})), 409);
+  EXPECT_THAT(problem_of(rig.run(request(LssInquire{}))).detail,
+              HasSubstr("no device is in LSS configuration state on network 1"));
+  select_all(rig);
+  auto r = rig.run(request(LssStore{}));
+  ASSERT_EQ(rig.nets.lss_pending.size(), 1u) << "selected: the store goes out";
+  rig.nets.lss_answer();
+  EXPECT_TRUE(r->has_value());
+  r = rig.run(request(LssSwitchGlobal{false}));
+  rig.nets.lss_answer();
+  EXPECT_EQ(refused(request(LssStore{})), 409) << "all back to waiting";
+  // A selective switch that nobody answers selects nothing.
+  r = rig.run(request(LssSwitchSelective{kDev}));
+  LssOutcome none;
+  none.status = S::timeout;
+  rig.nets.lss_answer(none);
+  EXPECT_EQ(refused(request(LssStore{})), 409);
 }
 
 // CiA 309-3 `set sdo_timeout` / `set sdo_block` (the ASCII front end): an
