@@ -12,6 +12,10 @@
 // synchronous types driven by the SYNCs this network sees), EMCY, SYNC and
 // TIME consumers, LSS master (CiA 305).
 //
+// A 1017h (producer heartbeat time) this network's SDO client writes to a
+// node, whoever asked for it, is the period the node is watched with from
+// then on (NmtMaster::set_producer_time()).
+//
 // PDOs follow the devices (CiA 301 7.2.2, 7.5.2.35-7.5.2.39): every
 // successful SDO download by this network's SDO client to 1400h-1BFFh of a
 // described node - whoever asked for it, boot-up DCF included - changes

@@ -43,6 +43,10 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
   pdo_.set_sync_window([this](TimePoint now) { return sync_.in_sync_window(now); });
   sdo_.set_download_observer([this](std::uint8_t node, const sdo::Multiplexer& mux, const Bytes& data) {
     if (auto key = pdo_table_.apply_download(node, mux.index, mux.sub, data)) refresh_pdo(node, *key);
+    // 1017h written by this network (REST, MQTT, DCF apply, boot-up
+    // configuration): the watch expects the new period at once.
+    if (mux.index == 0x1017 && mux.sub == 0 && data.size() >= 2)
+      nmt_.set_producer_time(node, std::chrono::milliseconds(data[0] | data[1] << 8), now_);
   });
   // Calls from outside through nmt(), sdo() and rpdo() move their
   // deadlines: the network's driver hears of it from here.

@@ -117,8 +117,7 @@ void NmtMaster::lose(std::uint8_t node) {
 
 Duration NmtMaster::AutoWatch::p() const {
   if (!enabled) return Duration::zero();
-  if (period > Duration::zero()) return period;
-  Duration longest{};
+  Duration longest = period;  // a given period is a floor (see the header)
   for (std::size_t k = 0; k < count; ++k) longest = std::max(longest, intervals[k]);
   return longest;
 }
@@ -126,13 +125,27 @@ Duration NmtMaster::AutoWatch::p() const {
 void NmtMaster::auto_heard(std::uint8_t node, TimePoint now, bool boot_up, bool was_lost) {
   AutoWatch& w = auto_[node];
   if (!w.enabled) return;
-  if (was_lost) {
-    // The gap was no period; the node may come back with another one.
-    w.count = w.next = 0;
-  } else if (!boot_up && w.last_heartbeat) {
-    w.intervals[w.next] = now - *w.last_heartbeat;
+  const auto record = [&w](Duration interval) {
+    w.intervals[w.next] = interval;
     w.next = (w.next + 1) % kLearnWindow;
     w.count = std::min(w.count + 1, kLearnWindow);
+  };
+  if (was_lost) {
+    // The gap was no period; the node may come back with another one.
+    const Duration p_before = w.p();
+    w.count = w.next = 0;
+    // Unless it is the second same gap in a row: a producer slower than 3P.
+    const Duration gap = w.last_heartbeat && !boot_up ? now - *w.last_heartbeat : Duration::zero();
+    const Duration previous = std::exchange(w.recovered_gap, gap);
+    constexpr int kSlowProducerGap = 10;
+    if (gap > Duration::zero() && previous > Duration::zero() && gap <= kSlowProducerGap * p_before &&
+        std::chrono::abs(gap - previous) <= previous / 8) {
+      record(gap);
+      w.recovered_gap = Duration::zero();
+    }
+  } else {
+    w.recovered_gap = Duration::zero();
+    if (!boot_up && w.last_heartbeat) record(now - *w.last_heartbeat);
   }
   // After a boot-up the first heartbeat may follow at any time (7.2.8.3.2.2
   // allows the boot-up to count as the first one): no interval from it.
@@ -153,6 +166,18 @@ bool NmtMaster::set_auto_watch(std::uint8_t node, bool enabled, Duration period)
   w.enabled = true;
   w.period = std::max(period, Duration::zero());
   // From the next heartbeat on; until then the deadline in force stays.
+  return true;
+}
+
+bool NmtMaster::set_producer_time(std::uint8_t node, Duration time, TimePoint now) {
+  const Report<NmtMaster> deadline_report(*this);
+  if (!valid_node(node)) return false;
+  AutoWatch& w = auto_[node];
+  if (!w.enabled) return true;
+  w.period = std::max(time, Duration::zero());
+  w.count = w.next = 0;  // intervals of the old period
+  w.recovered_gap = Duration::zero();
+  w.deadline = w.period > Duration::zero() ? now + 3 * w.period : TimePoint::max();
   return true;
 }
 

@@ -28,14 +28,21 @@
 //     node heard that has neither a heartbeat consumer nor node guarding is
 //     Lost when no heartbeat or boot-up came for 3 x P (at last + 3P, not
 //     before). P is the period given with set_auto_watch() (the node's
-//     1017h from its EDS/DCF), else learnt: the longest of the last 8
-//     intervals between consecutive heartbeats, so P follows a node that
-//     slows down at once and one that speeds up within 8 heartbeats. A
+//     1017h from its EDS/DCF, or the 1017h written to it: set_producer_time()),
+//     else learnt: the longest of the last 8 intervals between consecutive
+//     heartbeats, so P follows a node that slows down at once and one that
+//     speeds up within 8 heartbeats. A given P is a floor: a producer that
+//     is slower than it (another tool wrote its 1017h) is followed the same
+//     way (7.5.2.19: the consumer time must exceed the producer time). A
 //     learnt P needs two heartbeats; a boot-up counts as a heartbeat for
-//     the deadline but starts no interval, and after Lost the interval
-//     history is dropped and the next two heartbeats give P anew (the node
-//     may have been given another 1017h meanwhile). set_auto_watch(node,
-//     false) turns it off.
+//     the deadline but starts no interval. After Lost the interval history
+//     is dropped (the node may come back with another 1017h). A producer
+//     slower than 3P is Lost before each of its heartbeats: when two
+//     recoveries in a row end gaps of the same length (within 1/8, at most
+//     10 x P) with no heartbeat between, that gap is taken as an interval,
+//     so such a producer is followed after two Lost/Recovered, while a node
+//     that was away once does not stretch P. set_auto_watch(node, false)
+//     turns it off.
 //   - Node guarding: the first request goes out when guarding is set up,
 //     then one every guard time. A response whose toggle bit equals the
 //     previous accepted one is ignored and counted in toggle_errors
@@ -108,6 +115,13 @@ class NmtMaster : public DeadlineSource {
   // the node's heartbeats), or off. Every node is watched with a learnt P
   // unless this says otherwise. Returns false for an invalid node-ID.
   bool set_auto_watch(std::uint8_t node, bool enabled, Duration period = Duration::zero());
+  // The node's producer heartbeat time (1017h) was set by this side (an SDO
+  // download the caller made): when the node is auto-watched, P is `time`
+  // from now on (deadline now + 3 x time, the learnt intervals dropped);
+  // zero: it sends no heartbeat any more, so it is not expected until it
+  // is heard again (P learnt anew). No effect on an explicit consumer or
+  // guarding. Reports the deadline change. False for an invalid node-ID.
+  bool set_producer_time(std::uint8_t node, Duration time, TimePoint now);
   // The P watching uses for `node` now; zero when not known (yet) or not watched.
   Duration auto_watch_period(std::uint8_t node) const;
 
@@ -131,6 +145,7 @@ class NmtMaster : public DeadlineSource {
     std::array<Duration, kLearnWindow> intervals{};
     std::size_t count = 0, next = 0;          // ring of the latest intervals
     std::optional<TimePoint> last_heartbeat;  // start of the next interval
+    Duration recovered_gap{};                 // the gap the latest heartbeat ended, when it ended a Lost
     TimePoint deadline = TimePoint::max();
     Duration p() const;
   };

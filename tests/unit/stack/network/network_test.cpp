@@ -16,6 +16,7 @@
 #include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/pdo/transmitter.hpp"
 #include "canopen/sdo/server.hpp"
+#include "unit/stack/network/network_rig.hpp"
 
 namespace canopen {
 namespace {
@@ -285,6 +286,28 @@ TEST(Network, LssMasterHearsTheSlavesAndRunsItsWindows_Cia305) {
   EXPECT_EQ(lss_slave.mode(), lss::Mode::Configuration);
   for (std::size_t i = events_before; i < rig.events.size(); ++i)
     EXPECT_FALSE(std::holds_alternative<NodeStateEvent>(rig.events[i].body)) << "LSS frames are no node's heartbeat";
+}
+
+// Issue 28 item 2 (CiA 301 7.5.2.19): a 1017h the gateway writes to a node
+// (REST, MQTT, DCF apply and the boot-up configuration all write through
+// this SDO client) is the period the node is watched with at once: the
+// EDS's 1000 ms would report a 3000 ms producer lost before every heartbeat.
+TEST(Network, A1017hWrittenByTheGatewayIsTheWatchedPeriodAtOnce) {
+  test::NetworkRig rig("deploy/eds/cia401-io-module.eds");
+  ASSERT_TRUE(rig.net.nmt().set_auto_watch(test::NetworkRig::kNode, true, nmt::producer_heartbeat_time(rig.eds.od)));
+  rig.power_on();
+  rig.run_for(2500ms);
+  ASSERT_EQ(rig.net.nmt().auto_watch_period(test::NetworkRig::kNode), 1000ms) << "the EDS's 1017h";
+  ASSERT_FALSE(rig.write(0x1017, 0, {0xB8, 0x0B}));  // 3000 ms
+  EXPECT_EQ(rig.net.nmt().auto_watch_period(test::NetworkRig::kNode), 3000ms);
+  rig.events.clear();
+  rig.run_for(30s);
+  for (const auto& s : rig.bodies<NodeStateEvent>())
+    EXPECT_NE(s.cause, NodeStateEvent::Cause::Lost) << "a 3000 ms producer watched with 1000 ms";
+  EXPECT_GE(rig.bodies<HeartbeatEvent>().size(), 9U) << "it does produce every 3 s";
+  // A write the device refuses changes nothing.
+  ASSERT_TRUE(rig.write(0x1017, 1, {0x10, 0x00}));
+  EXPECT_EQ(rig.net.nmt().auto_watch_period(test::NetworkRig::kNode), 3000ms);
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 // (7.2.8.3.2.2, 1016h) and node guarding master (7.2.8.3.2.1).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <string>
 #include <variant>
@@ -410,6 +411,63 @@ TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_LearntPeriodFollowsANodeThatSlowsDownOr
   EXPECT_EQ(take_events().size(), 8U) << "heartbeats only, never lost";
   advance(300ms);
   EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"}));
+}
+
+// Issue 28 item 2: the gateway wrote 1017h = 500 ms to a node whose EDS
+// says 100 ms; the watch takes the written period at once instead of
+// reporting the node lost and recovered at every heartbeat.
+TEST_F(MasterTest, AutoWatch_7_5_2_19_AProducerTimeWrittenByThisSideIsWatchedAtOnce) {
+  ASSERT_TRUE(master.set_auto_watch(5, true, 100ms));
+  rx("705#05");
+  ASSERT_TRUE(master.set_producer_time(5, 500ms, clock.now()));
+  EXPECT_EQ(master.auto_watch_period(5), 500ms);
+  EXPECT_EQ(master.next_deadline(), clock.now() + 1500ms) << "3 x the new period from the write";
+  take_events();
+  for (int i = 0; i < 10; ++i) {
+    advance(500ms);
+    rx("705#05");
+  }
+  EXPECT_EQ(take_events().size(), 10U) << "heartbeats only, never lost";
+  advance(1499ms);
+  EXPECT_TRUE(events.empty());
+  advance(1ms);
+  EXPECT_EQ(take_events(), (Strings{"state 5 lost operational/-"})) << "still watched: lost at 3 x 500 ms";
+  // 1017h = 0: the node sends no heartbeat any more, so none is expected.
+  rx("705#05");
+  ASSERT_TRUE(master.set_producer_time(5, 0ms, clock.now()));
+  take_events();
+  advance(60s);
+  EXPECT_TRUE(events.empty());
+  EXPECT_FALSE(master.set_producer_time(0, 100ms, clock.now()));
+  // Not watched automatically (heartbeat-consumer-ms 0): stays so.
+  ASSERT_TRUE(master.set_auto_watch(6, false));
+  ASSERT_TRUE(master.set_producer_time(6, 100ms, clock.now()));
+  EXPECT_EQ(master.auto_watch_period(6), 0ms);
+}
+
+// CiA 301 7.5.2.19 (consumer time above producer time): the EDS says 100 ms
+// but another tool gave the node 500 ms. Lost at 3 x 100 ms before each of
+// its heartbeats at first; after two such gaps the watch follows the
+// producer. A single long gap (the node away once) does not stretch P: see
+// PeriodFromTheEds1017h above.
+TEST_F(MasterTest, AutoWatch_7_5_2_19_AGivenPeriodFollowsAProducerThatIsSlowerThanIt) {
+  ASSERT_TRUE(master.set_auto_watch(5, true, 100ms));
+  rx("705#05");
+  take_events();
+  for (int i = 0; i < 20; ++i) {
+    advance(500ms);
+    rx("705#05");
+  }
+  const auto seen = take_events();
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), "state 5 lost operational/-"), 2) << testing::PrintToString(seen);
+  EXPECT_EQ(master.auto_watch_period(5), 500ms);
+  EXPECT_EQ(seen.back(), "hb 5 operational") << "the last ten heartbeats: no loss";
+  // Back to 100 ms: the given period is a floor; the long intervals leave the window.
+  for (int i = 0; i < 8; ++i) {
+    advance(100ms);
+    rx("705#05");
+  }
+  EXPECT_EQ(master.auto_watch_period(5), 100ms);
 }
 
 TEST_F(MasterTest, AutoWatch_7_2_8_3_2_2_OffForANodeConfiguredWithZero) {
