@@ -1,6 +1,7 @@
 #include "app/network_unit.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <utility>
 
 #include "canopen/od/gateway_dictionary.hpp"
@@ -44,6 +45,19 @@ bool consumed(const NodeConfig& c) { return c.heartbeat_consumer && c.heartbeat_
 
 }  // namespace
 
+canopen::od::GatewayIdentity own_identity(const OwnIdentity& configured, const std::string& version) {
+  canopen::od::GatewayIdentity id;
+  id.device_type = configured.device_type;
+  id.vendor_id = configured.vendor_id;
+  id.product_code = kOwnProductCode;
+  id.serial = configured.serial.value_or(0);
+  id.software_version = version;
+  unsigned major = 0, minor = 0;
+  if (std::sscanf(version.c_str(), "%u.%u", &major, &minor) == 2)
+    id.revision = (std::min(major, 0xFFFFu) << 16) | std::min(minor, 0xFFFFu);
+  return id;
+}
+
 NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, NetworkConfig config,
                          std::map<std::uint8_t, canopen::eds::DeviceDescription> descs, NetworkLink opened,
                          Logger& logger, const std::string& config_source)
@@ -62,8 +76,7 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
   tapped = std::make_unique<trace::TappedChannel>(*link.channel, *tap);
   channel = tapped.get();
   // The gateway's own node: its dictionary says what it produces.
-  canopen::od::GatewayIdentity identity;
-  identity.software_version = CANOPEN_GATEWAY_VERSION;
+  canopen::od::GatewayIdentity identity = own_identity(cfg.identity, CANOPEN_GATEWAY_VERSION);
   canopen::od::GatewayDictionaryOptions od_options;
   // 1010h "save" / 1011h "load" (7.5.2.13/14): the power-on values a reset of
   // the own node returns to, for the life of the process (a restart is a
@@ -122,6 +135,20 @@ NetworkUnit::NetworkUnit(boost::asio::io_context& io, std::uint32_t net_number, 
   dev_cb.on_state_change = [this](canopen::NmtState now_state, canopen::NmtState before) {
     log.info(label + " own node " + std::string(canopen::to_string(before)) + " -> " +
              std::string(canopen::to_string(now_state)));
+    log.flush();
+  };
+  // CiA 301 7.2.8.2.2.1: the master that guards the own node stopped (or
+  // came back). LocalNode has sent EMCY 8130h (or its reset), which the
+  // event stream carries as the own node's EMCY; this is the log line.
+  dev_cb.on_life_guarding = [this](canopen::nmt::LifeGuardingEvent e) {
+    if (e == canopen::nmt::LifeGuardingEvent::Occurred) {
+      const auto life = local ? local->device().nmt().life_time() : canopen::Duration::zero();
+      log.warn(label + " own node: life guarding event: no guarding request from the NMT master for " +
+               std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(life).count()) +
+               " ms (100Ch x 100Dh); EMCY 8130h sent");
+    } else {
+      log.info(label + " own node: guarded again by the NMT master; EMCY 8130h reset");
+    }
     log.flush();
   };
   // A reset communication of the own node returns 1016h to its power-on

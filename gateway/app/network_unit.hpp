@@ -29,6 +29,7 @@
 #include "canopen/events.hpp"
 #include "canopen/local_node.hpp"
 #include "canopen/network.hpp"
+#include "canopen/od/gateway_dictionary.hpp"
 #include "canopen/od/object_dictionary.hpp"
 #include "canopen/socketcan/service_driver.hpp"
 #include "config/config.hpp"
@@ -81,6 +82,13 @@ struct NetworkLink {
   std::unique_ptr<canopen::sim::AsioMemoryChannel> memory_gateway, memory_devices;
   std::unique_ptr<canopen::sim::Simulator> simulator;
 };
+
+// The own node's identity on a network (issue 28 item 4): 1000h, 1018h sub
+// 1 and 4 as configured; 1018h sub 2 kOwnProductCode; sub 3 the program's
+// `version` ("X.Y.Z") as (X << 16) | Y, CiA 301 7.5.2.20's major revision
+// (CANopen behaviour) and minor revision; 100Ah the version itself.
+inline constexpr std::uint32_t kOwnProductCode = 0x43475700;  // "CGW" and 00h
+canopen::od::GatewayIdentity own_identity(const OwnIdentity& configured, const std::string& version);
 
 struct NetworkUnit {
   // Builds the own dictionary from `cfg` (heartbeat, consumers, SYNC,

@@ -79,7 +79,10 @@ Config parse_config(const std::string& yaml_text, const std::string& file) {
   top.expect_map({"gateway", "networks", "mqtt", "http", "sparkplug", "ascii", "history"});
   std::uint8_t default_node_id = 127;
   if (auto g = top.get("gateway")) {
-    g->expect_map({"id", "node-id", "log-level", "state-dir"});
+    g->expect_map({"id", "node-id", "log-level", "state-dir", "device-type", "vendor-id", "serial-number"});
+    if (auto v = g->get("device-type")) c.identity.device_type = static_cast<std::uint32_t>(v->integer(0, 0xFFFFFFFF));
+    if (auto v = g->get("vendor-id")) c.identity.vendor_id = static_cast<std::uint32_t>(v->integer(0, 0xFFFFFFFF));
+    if (auto v = g->get("serial-number")) c.identity.serial = static_cast<std::uint32_t>(v->integer(0, 0xFFFFFFFF));
     if (auto v = g->get("id")) {
       c.gateway_id = v->str();
       if (!valid_topic_level(c.gateway_id)) v->fail("'" + c.gateway_id + "' cannot be an MQTT topic level");

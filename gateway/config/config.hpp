@@ -63,6 +63,24 @@ struct LssAssignConfig {
   bool store = true;
 };
 
+// The gateway's own node as masters and tools see it (1000h, 1018h): the
+// `gateway:` keys device-type, vendor-id and serial-number, the same on
+// every network (issue 28 item 4). The product code and revision come from
+// the program itself (app/network_unit.cpp).
+struct OwnIdentity {
+  // 1000h: bits 0..15 309, the CiA 309 series (access to CANopen from
+  // other networks: what this gateway is); bits 16..31 0.
+  std::uint32_t device_type = 309;
+  std::uint32_t vendor_id = 0;  // 1018h sub 1: 0 until the operator has a CiA vendor-ID to give
+  // 1018h sub 4: merge() defaults it to serial_from_machine_id(), so two
+  // gateways on one bus (or two tools' views of them) differ.
+  std::optional<std::uint32_t> serial;
+};
+
+// 1018h sub 4 from the text of /etc/machine-id (32 hex digits, random per
+// installation): its first 8 hex digits; nullopt when the text is not one.
+std::optional<std::uint32_t> serial_from_machine_id(const std::string& text);
+
 struct NetworkConfig {
   std::string interface;     // SocketCAN interface; "" for the simulated demo network
   bool simulated = false;    // --demo or simulated: true: in-process bus with simulated devices
@@ -70,6 +88,7 @@ struct NetworkConfig {
   std::uint32_t bitrate = 0; // informative only (the interface is configured outside)
   std::uint8_t node_id = 127;  // the gateway's own node-ID on this network
   std::chrono::milliseconds heartbeat_producer{1000};  // the gateway's 1017h
+  OwnIdentity identity;  // Config::identity, copied by merge()
   SyncConfig sync;
   TimeConfig time;
   // boot: {read-pdo-config: true}: BootConfig::read_pdo_config for every
@@ -185,6 +204,7 @@ struct Config {
   std::string source;      // the file it came from ("" = command line only)
   std::string gateway_id;  // default: host name
   std::uint8_t node_id = 127;  // gateway.node-id: the own node-ID where a network does not say
+  OwnIdentity identity;        // gateway.device-type, vendor-id, serial-number
   LogLevel log_level = LogLevel::Info;
   // Each network's event seq (seq-net<N>) and, by default, the MQTT queue.
   // merge() always sets it; "" (a Config built by hand) keeps nothing.

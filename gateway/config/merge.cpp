@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 
 #include "ascii/ascii_listen.hpp"
 #include "canopen/eds/eds.hpp"
@@ -26,7 +27,37 @@ bool ip_literal(const std::string& s) {
   return ::inet_pton(AF_INET6, s.substr(0, s.find('%')).c_str(), buf) == 1;
 }
 
+// The first line of the machine id (systemd's /etc/machine-id, else
+// D-Bus's copy); "" when neither can be read.
+std::string machine_id_text() {
+  for (const char* path : {"/etc/machine-id", "/var/lib/dbus/machine-id"}) {
+    std::ifstream in(path);
+    std::string line;
+    if (in && std::getline(in, line) && !line.empty()) return line;
+  }
+  return {};
+}
+
+// FNV-1a: a serial from the gateway id where the machine has no id.
+std::uint32_t fnv1a(const std::string& s) {
+  std::uint32_t h = 2166136261u;
+  for (unsigned char ch : s) h = (h ^ ch) * 16777619u;
+  return h;
+}
+
 }  // namespace
+
+std::optional<std::uint32_t> serial_from_machine_id(const std::string& text) {
+  if (text.size() < 8) return std::nullopt;
+  std::uint32_t v = 0;
+  for (std::size_t i = 0; i < 8; ++i) {
+    const char ch = text[i];
+    const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : ch >= 'A' && ch <= 'F' ? ch - 'A' + 10 : -1;
+    if (d < 0) return std::nullopt;
+    v = v << 4 | static_cast<std::uint32_t>(d);
+  }
+  return v;
+}
 
 Config merge(Config c, const CliOptions& cli) {
   if (cli.log_level) c.log_level = *cli.log_level;
@@ -212,6 +243,8 @@ Config merge(Config c, const CliOptions& cli) {
                         (net.simulated ? std::string("the demo network") : net.interface));
     }
   }
+  if (!c.identity.serial) c.identity.serial = serial_from_machine_id(machine_id_text()).value_or(fnv1a(c.gateway_id));
+  for (auto& n : c.networks) n.identity = c.identity;
   // Tokenless MQTT requests are refused unless mqtt.requests-role says
   // otherwise (the broker's users are not the gateway's). The demo without
   // tokens lets them read, as its tour does; writes need the key set.

@@ -7,8 +7,10 @@
 //     and the master side's node states: CAN overrun 8110h (raised and
 //     cleared at once: an event, not a condition), error passive 8120h
 //     (raised while it lasts), life guard / heartbeat error 8130h (raised
-//     while any consumed heartbeat or guarded node is lost), recovered from
-//     bus-off 8140h (an event).
+//     while any consumed heartbeat or guarded node is lost, or while the
+//     NMT master has not guarded this node within its node life time,
+//     100Ch x 100Dh: 7.2.8.2.2.1's life guarding event, which CANopenNode's
+//     devices report the same way), recovered from bus-off 8140h (an event).
 //   - SYNC on request (send_sync) with the COB-ID of 1005h (7.5.2.5), like
 //     the periodic SYNC its Device produces.
 //   - Which frames the two sides of the process must hear of each other (a
@@ -63,8 +65,14 @@ class LocalNode : public DeadlineSource {
 
   // Power-on (Device::start): boot-up, then heartbeats.
   void start(TimePoint now) { device_.start(now); }
-  bool on_frame(const can::Frame& frame, TimePoint now) { return device_.on_frame(frame, now); }
-  void on_time(TimePoint now) { device_.on_time(now); }
+  bool on_frame(const can::Frame& frame, TimePoint now) {
+    now_ = now;
+    return device_.on_frame(frame, now);
+  }
+  void on_time(TimePoint now) {
+    now_ = now;
+    device_.on_time(now);
+  }
   TimePoint next_deadline() const { return device_.next_deadline(); }
 
   // A state change of the channel: 8120h while error passive, 8110h on a
@@ -75,6 +83,10 @@ class LocalNode : public DeadlineSource {
   void on_node_state(const NodeStateEvent& ev, TimePoint now);
   // Nodes lost now (heartbeat or guarding), as counted for 8130h.
   const std::set<std::uint8_t>& lost_nodes() const { return lost_; }
+  // Whether the master's guarding of this node has lapsed (life guarding
+  // event Occurred, not yet Resolved). The callbacks' on_life_guarding
+  // hears both after the EMCY went out.
+  bool life_guarding_lost() const { return life_lost_; }
 
   // One SYNC now, with the COB-ID of 1005h and the counter when given
   // (7.2.5.2.1: 0 or 1 data bytes); sent whatever the NMT state, as a
@@ -95,10 +107,18 @@ class LocalNode : public DeadlineSource {
 
  private:
   void sent(const can::Frame& f);
+  void on_life_guarding(nmt::LifeGuardingEvent e, TimePoint now);
+  // 8130h while a node is lost or life guarding has lapsed.
+  void update_guard_emcy(bool was_raised, TimePoint now);
+  bool guard_emcy_raised() const { return life_lost_ || !lost_.empty(); }
 
   od::ObjectDictionary& od_;
   FrameSink bus_;
   FrameSink to_master_;
+  std::function<void(nmt::LifeGuardingEvent)> user_life_guarding_;
+  // The time of the call that caused the event: Device's callback has none.
+  TimePoint now_{};
+  bool life_lost_ = false;
   Device device_;
   std::set<std::uint8_t> lost_;
 };

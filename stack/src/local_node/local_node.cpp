@@ -22,7 +22,12 @@ LocalNode::LocalNode(od::ObjectDictionary& dictionary, DeviceConfig config, Fram
     : od_(dictionary),
       bus_(std::move(bus)),
       to_master_(std::move(to_master)),
-      device_(dictionary, config, [this](const can::Frame& f) { sent(f); }, std::move(callbacks)) {
+      user_life_guarding_(std::exchange(callbacks.on_life_guarding, nullptr)),
+      device_(dictionary, config, [this](const can::Frame& f) { sent(f); },
+              [&callbacks, this] {
+                callbacks.on_life_guarding = [this](nmt::LifeGuardingEvent e) { on_life_guarding(e, now_); };
+                return std::move(callbacks);
+              }()) {
   device_.on_deadline_change([this](TimePoint next) { report_deadline(next); });
 }
 
@@ -47,12 +52,26 @@ void LocalNode::on_bus_event(const can::BusEvent& ev, TimePoint now) {
 }
 
 void LocalNode::on_node_state(const NodeStateEvent& ev, TimePoint now) {
+  const bool was_raised = guard_emcy_raised();
   if (ev.cause == NodeStateEvent::Cause::Lost) {
-    if (lost_.insert(ev.node).second && lost_.size() == 1)
-      device_.raise_emcy(kEmcyLifeGuardOrHeartbeat, emcy::error_register::kCommunication, now);
-  } else if (lost_.erase(ev.node) == 1 && lost_.empty()) {
-    device_.clear_emcy(kEmcyLifeGuardOrHeartbeat, now);
+    lost_.insert(ev.node);
+  } else {
+    lost_.erase(ev.node);
   }
+  update_guard_emcy(was_raised, now);
+}
+
+void LocalNode::on_life_guarding(nmt::LifeGuardingEvent e, TimePoint now) {
+  const bool was_raised = guard_emcy_raised();
+  life_lost_ = e == nmt::LifeGuardingEvent::Occurred;
+  update_guard_emcy(was_raised, now);
+  if (user_life_guarding_) user_life_guarding_(e);
+}
+
+void LocalNode::update_guard_emcy(bool was_raised, TimePoint now) {
+  const bool raised = guard_emcy_raised();
+  if (raised && !was_raised) device_.raise_emcy(kEmcyLifeGuardOrHeartbeat, emcy::error_register::kCommunication, now);
+  if (!raised && was_raised) device_.clear_emcy(kEmcyLifeGuardOrHeartbeat, now);
 }
 
 void LocalNode::send_sync(std::optional<std::uint8_t> counter) {

@@ -52,6 +52,32 @@ struct UnitRig {
   std::vector<canopen::Event> events;
 };
 
+// Issue 28 item 4, CiA 301 7.5.2.1 and 7.5.2.20: masters and tools (an
+// LSS inquiry, python-canopen, a PLC's scan) tell the gateway's own node
+// apart by 1000h and 1018h: a device type, the configured vendor-ID and a
+// serial unique per machine, product code and revision from the program.
+TEST(NetworkUnit, TheOwnNodeHasADeviceTypeAndAnIdentity_7_5_2_20) {
+  UnitRig r;
+  const auto& od = *r.unit->own_od;
+  EXPECT_EQ(od.get_unsigned(0x1000, 0), 309U) << "profile 309: access from other networks";
+  EXPECT_EQ(od.get_unsigned(0x1018, 0), 4U);
+  EXPECT_EQ(od.get_unsigned(0x1018, 1), 0U) << "no vendor-ID configured";
+  EXPECT_EQ(od.get_unsigned(0x1018, 2), kOwnProductCode);
+  EXPECT_EQ(od.get_unsigned(0x1018, 3), own_identity({}, CANOPEN_GATEWAY_VERSION).revision);
+  const auto serial = od.get_unsigned(0x1018, 4);
+  ASSERT_TRUE(serial.has_value());
+  EXPECT_EQ(*serial, *r.unit->cfg.identity.serial) << "merge() gave the default";
+  EXPECT_NE(*serial, 0U) << "from the machine id (or the gateway id)";
+
+  const auto id = own_identity(OwnIdentity{0x00020191, 0x000004A2, 0x12345678}, "2.7.1");
+  EXPECT_EQ(id.device_type, 0x00020191U);
+  EXPECT_EQ(id.vendor_id, 0x000004A2U);
+  EXPECT_EQ(id.serial, 0x12345678U);
+  EXPECT_EQ(id.revision, 0x00020007U) << "major 2 (CANopen behaviour), minor 7";
+  EXPECT_EQ(id.software_version, "2.7.1");
+  EXPECT_EQ(own_identity({}, "not a version").revision, 0U);
+}
+
 TEST(NetworkUnit, TheSyncRequestGoesOutWith1005hAndTheMasterSideHearsIt) {
   UnitRig r;
   r.unit->local->start(NetworkUnit::now());

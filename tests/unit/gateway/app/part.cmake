@@ -6,5 +6,5 @@ if(NOT TARGET PahoMqttCpp::paho-mqttpp3)  # found once per build (app tests use 
 endif()
 canopen_unit_test(app_tests SOURCES ${U}/gateway/app/*_test.cpp LIBS gateway_process PahoMqttCpp::paho-mqttpp3 sparkplug_proto)
 if(TARGET app_tests)  # app_node_config_test.cpp uploads deploy/eds/ files
-  target_compile_definitions(app_tests PRIVATE CANOPEN_SOURCE_DIR="${CMAKE_SOURCE_DIR}")
+  target_compile_definitions(app_tests PRIVATE CANOPEN_SOURCE_DIR="${CMAKE_SOURCE_DIR}" CANOPEN_GATEWAY_VERSION="${PROJECT_VERSION}")
 endif()

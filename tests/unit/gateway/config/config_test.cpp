@@ -737,6 +737,32 @@ TEST(Config, AsciiKeysReachTheirFields) {
 // (contract "ASCII"): admin with no tokens on a loopback or unix socket,
 // operator once tokens exist or the port is reachable from elsewhere; a
 // role given explicitly always wins.
+// Issue 28 item 4: the own node's 1000h and 1018h sub 1/4 from the
+// gateway: section, on every network; the serial defaults to one per
+// machine (its /etc/machine-id).
+TEST(Config, TheOwnNodesIdentityKeysReachEveryNetwork) {
+  CliOptions cli;
+  cli.can_interfaces = {"can0", "can1"};
+  const Config c = merge(parse_config("gateway:\n  device-type: 0x00000191\n  vendor-id: 0x4A2\n"
+                                      "  serial-number: 1234\n",
+                                      "gw.yaml"),
+                         cli);
+  ASSERT_EQ(c.networks.size(), 2U);
+  for (const auto& n : c.networks) {
+    EXPECT_EQ(n.identity.device_type, 0x191U);
+    EXPECT_EQ(n.identity.vendor_id, 0x4A2U);
+    EXPECT_EQ(n.identity.serial, 1234U);
+  }
+  const Config d = merge(Config{}, cli);
+  EXPECT_EQ(d.networks[0].identity.device_type, 309U);
+  ASSERT_TRUE(d.networks[0].identity.serial.has_value()) << "always given a serial";
+  EXPECT_EQ(d.networks[0].identity.serial, d.networks[1].identity.serial);
+  EXPECT_EQ(serial_from_machine_id("3f9a01bc8d2e4f6a9b0c1d2e3f405162\n"), 0x3F9A01BCU);
+  EXPECT_EQ(serial_from_machine_id("short"), std::nullopt);
+  EXPECT_EQ(serial_from_machine_id("uninitialized"), std::nullopt) << "systemd's placeholder";
+  EXPECT_THAT(config_error("gateway:\n  vendor-id: 0x100000000\n"), HasSubstr("vendor-id"));
+}
+
 TEST(Config, AsciiRoleDefaultFollowsRestsTokenlessRule) {
   CliOptions cli;
   cli.can_interfaces = {"can0"};

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "canopen/od/gateway_dictionary.hpp"
+#include "unit/stack/nmt/nmt_test_support.hpp"
 
 namespace canopen {
 namespace {
@@ -91,6 +92,70 @@ TEST(LocalNode, Emcy_7_2_7_1_HeartbeatOrGuardingLossIs8130hWhileAnyNodeIsLost) {
   EXPECT_EQ(r.emcy_codes().size(), 1U) << "node 6 is still lost";
   r.node_state(6, NodeStateEvent::Cause::BootUp);
   EXPECT_EQ(r.emcy_codes(), (std::vector<std::uint16_t>{kEmcyLifeGuardOrHeartbeat, 0x0000}));
+}
+
+// Issue 28 item 3, CiA 301 7.2.8.2.2.1: the NMT master guarded the own node
+// (100Ch/100Dh set, heartbeat 1017h 0) and stopped: the life guarding event
+// is EMCY 8130h with the communication bit (as CANopenNode's devices send
+// it) and reaches the application; guarding again resets it. It shares
+// 8130h with the lost nodes: raised once while either holds.
+TEST(LocalNode, Emcy_7_2_8_2_2_1_LifeGuardingLapseIs8130hUntilGuardedAgain) {
+  FakeClock clock;
+  auto od = od::make_gateway_dictionary(kOwn, od::GatewayIdentity{});
+  ASSERT_FALSE(od.set(0x1017, 0, Value::of_unsigned(DataType::Unsigned16, 0)));
+  ASSERT_FALSE(od.set(0x100C, 0, Value::of_unsigned(DataType::Unsigned16, 100)));
+  ASSERT_FALSE(od.set(0x100D, 0, Value::of_unsigned(DataType::Unsigned8, 3)));
+  std::vector<can::Frame> bus;
+  std::vector<nmt::LifeGuardingEvent> heard;
+  DeviceConfig cfg;
+  cfg.node_id = kOwn;
+  DeviceCallbacks cb;
+  cb.on_life_guarding = [&](nmt::LifeGuardingEvent e) { heard.push_back(e); };
+  LocalNode node(od, cfg, [&](const can::Frame& f) { bus.push_back(f); }, nullptr, cb);
+  node.start(clock.now());
+  const auto advance = [&](Duration d) {
+    const TimePoint end = clock.now() + d;
+    while (node.next_deadline() <= end) {
+      if (node.next_deadline() > clock.now()) clock.advance_to(node.next_deadline());
+      node.on_time(clock.now());
+    }
+    clock.advance_to(end);
+  };
+  const auto emcy = [&] {
+    std::vector<std::uint16_t> out;
+    for (const auto& f : bus)
+      if (f.id == kOwnEmcy) out.push_back(static_cast<std::uint16_t>(f.data[0] | f.data[1] << 8));
+    return out;
+  };
+  const can::Frame guard = test::parse("764#R1");  // 700h + 100: a guarding request
+  advance(1s);
+  ASSERT_TRUE(node.on_frame(guard, clock.now())) << "the first request starts life guarding";
+  advance(299ms);
+  EXPECT_TRUE(emcy().empty());
+  advance(1ms);  // 100 ms x 3 without a request
+  ASSERT_EQ(emcy(), std::vector<std::uint16_t>{kEmcyLifeGuardOrHeartbeat});
+  EXPECT_NE(bus.back().data[2] & emcy::error_register::kCommunication, 0) << "1001h bit 4";
+  EXPECT_TRUE(node.life_guarding_lost());
+  EXPECT_EQ(heard, std::vector<nmt::LifeGuardingEvent>{nmt::LifeGuardingEvent::Occurred}) << "the application hears it";
+  // A lost node meanwhile: 8130h is already up.
+  NodeStateEvent lost;
+  lost.node = 5;
+  lost.cause = NodeStateEvent::Cause::Lost;
+  node.on_node_state(lost, clock.now());
+  EXPECT_EQ(emcy().size(), 1U);
+  node.on_frame(guard, clock.now());
+  EXPECT_FALSE(node.life_guarding_lost());
+  EXPECT_EQ(heard.back(), nmt::LifeGuardingEvent::Resolved);
+  EXPECT_EQ(emcy().size(), 1U) << "node 5 is still lost";
+  NodeStateEvent back = lost;
+  back.cause = NodeStateEvent::Cause::Heartbeat;
+  back.state = NmtState::Operational;
+  node.on_node_state(back, clock.now());
+  EXPECT_EQ(emcy(), (std::vector<std::uint16_t>{kEmcyLifeGuardOrHeartbeat, 0x0000})) << "error reset";
+  // And alone: lapse, then guarded again.
+  advance(300ms);
+  node.on_frame(guard, clock.now());
+  EXPECT_EQ(emcy(), (std::vector<std::uint16_t>{kEmcyLifeGuardOrHeartbeat, 0x0000, kEmcyLifeGuardOrHeartbeat, 0x0000}));
 }
 
 TEST(LocalNode, Sync_7_5_2_5_OnRequestWithTheCobIdOf1005hToBusAndMaster) {
