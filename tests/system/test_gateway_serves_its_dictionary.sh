@@ -15,6 +15,10 @@ expect() {
 expect "^data $(hex canopen-gateway)$" "$SDO" upload vcan0 100 0x1008 0
 # 1018h identity: sub 0 = 4 entries
 expect "^data 04$" "$SDO" upload vcan0 100 0x1018 0
+# issue 28 item 4: a device type (309, the CiA 309 gateway series) and the
+# product code 43475700h ("CGW"), so masters can tell the gateway apart
+expect "^data 35010000$" "$SDO" upload vcan0 100 0x1000 0
+expect "^data 00574743$" "$SDO" upload vcan1 100 0x1018 2
 # 1200h sub 1/2: the server's own COB-IDs 600h+100 = 664h, 580h+100 = 5E4h
 expect "^data 64060000$" "$SDO" upload vcan0 100 0x1200 1
 expect "^data e4050000$" "$SDO" upload vcan1 100 0x1200 2
