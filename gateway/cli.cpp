@@ -101,7 +101,8 @@ is needed: --can, networks: in the --config file, or --demo.
                      ADDR:PORT (an IP address; port 0: any free one) or
                      unix:PATH (mode 0660). Off loopback the file needs
                      ascii.allow-remote: true. Clients act with ascii.role
-                     (default operator). Default: ascii.listen in the file,
+                     (default admin without http tokens, else operator).
+                     Default: ascii.listen in the file,
                      else off.
   --demo             add a simulated network with a CiA 402 drive (node 5)
                      and two CiA 401 I/O modules (nodes 10, 11): no CAN

@@ -61,7 +61,7 @@ std::unique_ptr<ascii::Server> make_ascii_server(boost::asio::io_context& io, Ap
   const auto& config = app.config();
   ascii::ServerConfig a;
   a.listen = config.ascii.listen;
-  a.role = config.ascii.role;
+  a.role = config.ascii.role.value_or(Role::Operator);  // merge() sets it
   a.idle_timeout = config.ascii.idle_timeout;
   a.max_clients = config.ascii.max_clients;
   a.networks = static_cast<std::uint32_t>(config.networks.size());

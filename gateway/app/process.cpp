@@ -198,7 +198,7 @@ int run_gateway(const CliOptions& opts) {
               : config.ascii.allow_remote && !gateway::ascii::parse_listen_address(where)->local()
                   ? std::string("reachable from other machines: no authentication")
                   : std::string("this machine only")) +
-             "; clients act as " + std::string(to_string(config.ascii.role)) + ")");
+             "; clients act as " + std::string(to_string(config.ascii.role.value_or(Role::Operator))) + ")");
   }
 
   app->start();

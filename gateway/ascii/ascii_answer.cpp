@@ -16,10 +16,12 @@ std::string error_response(std::uint32_t seq, Error e) {
          std::string(error_text(e)) + "\r\n";
 }
 
-std::string role_refusal(std::uint32_t seq, std::string_view detail) {
-  return "[" + std::to_string(seq) + "] ERROR:" + std::to_string(static_cast<unsigned>(Error::RequestNotSupported)) +
-         " #" + std::string(error_text(Error::RequestNotSupported)) + " " + std::string(detail) +
-         "; ascii.role in the gateway's configuration sets the role of ASCII clients\r\n";
+std::optional<std::string> role_refusal(std::uint32_t seq, int status, std::string_view detail) {
+  if (status != 401 && status != 403) return std::nullopt;
+  std::string line = error_response(seq, Error::RequestNotSupported);
+  line.insert(line.size() - 2, " " + std::string(status == 401 ? "the ASCII clients' role is none" : detail) +
+                                   "; ascii.role in the gateway's configuration sets the role of ASCII clients");
+  return line;
 }
 
 std::string abort_response(std::uint32_t seq, std::uint32_t abort_code) {

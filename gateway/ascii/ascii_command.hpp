@@ -275,9 +275,10 @@ class LineFramer {
 
 std::string ok_response(std::uint32_t seq);                   // "[seq] OK\r\n"
 std::string error_response(std::uint32_t seq, Error e);       // "[seq] ERROR:101 #Syntax error.\r\n"
-// A refusal by role: "[seq] ERROR:100 #Request not supported. role operator
-// may not do this (needs admin); ascii.role ... sets the role ...\r\n".
-std::string role_refusal(std::uint32_t seq, std::string_view detail);
+// A refusal by role (the core's 401 or 403, else nullopt): "[seq] ERROR:100
+// #Request not supported. role operator may not do this (needs admin);
+// ascii.role ... sets the role ...\r\n".
+std::optional<std::string> role_refusal(std::uint32_t seq, int status, std::string_view detail);
 std::string abort_response(std::uint32_t seq, std::uint32_t abort_code);  // "[seq] ERROR:0x06020000 #...\r\n"
 std::string empty_response();                                // "\r\n"
 std::string_view help_text(HelpTopic topic);                 // starts "\n", ends "\r\n"

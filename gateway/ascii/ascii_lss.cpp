@@ -23,9 +23,8 @@ std::string problem_text(std::uint32_t seq, const core::Problem& p) {
       case core::LssError::other: return error_response(seq, Error::LssManufacturer);
     }
   }
+  if (auto refused = role_refusal(seq, p.status, p.detail)) return *refused;  // not for this client's role
   switch (p.status) {
-    case 401: return role_refusal(seq, "the ASCII clients' role is none");
-    case 403: return role_refusal(seq, p.detail);  // not for this client's role
     case 400: return error_response(seq, Error::Syntax);
     // An unknown network is refused before the command is read; a fastscan
     // that nobody answered is a 404 too: for CiA 309-3 a time-out.

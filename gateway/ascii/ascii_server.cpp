@@ -94,9 +94,8 @@ asio::ip::tcp::endpoint tcp_endpoint(const Protocol::endpoint& ep) {
 // A refusal or failure of the core as CiA 309-3 answers it.
 std::string problem_text(std::uint32_t seq, const core::Problem& p) {
   if (p.abort_code) return abort_response(seq, *p.abort_code);
+  if (auto refused = role_refusal(seq, p.status, p.detail)) return *refused;  // not for this client's role
   switch (p.status) {
-    case 401: return role_refusal(seq, "the ASCII clients' role is none");
-    case 403: return role_refusal(seq, p.detail);  // not for this client's role
     case 404: return error_response(seq, Error::UnsupportedNet);
     case 400: return abort_response(seq, 0x06090030);  // a value the node's EDS/DCF does not allow
     default: return error_response(seq, Error::InternalState);  // 429 queue share, 503 bus down, ...

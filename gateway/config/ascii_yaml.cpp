@@ -15,10 +15,7 @@ void parse_ascii(const At& a, AsciiConfig& ac) {
     ac.listen_origin = v->where() + " " + ac.listen;
   }
   if (auto v = a.get("allow-remote")) ac.allow_remote = v->boolean();
-  if (auto v = a.get("role")) {
-    ac.role = parse_role(*v);
-    ac.role_set = true;
-  }
+  if (auto v = a.get("role")) ac.role = parse_role(*v);
   if (auto v = a.get("idle-timeout-s")) ac.idle_timeout = std::chrono::seconds(v->integer(0, 86400));
   if (auto v = a.get("max-clients")) ac.max_clients = v->integer(1, 1024);
 }

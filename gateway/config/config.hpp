@@ -192,10 +192,9 @@ struct AsciiConfig {
   std::string listen_origin;
   bool allow_remote = false;
   // What every ASCII client may do: ascii.role, or by default REST's
-  // tokenless rule (merge()): admin when no tokens are configured and the
-  // socket is loopback or unix only, else operator.
-  Role role = Role::Operator;
-  bool role_set = false;  // ascii.role was given
+  // tokenless rule (merge() always sets it): admin when no tokens are
+  // configured and the socket is loopback or unix only, else operator.
+  std::optional<Role> role;
   std::chrono::seconds idle_timeout{300};  // 0 = never closed for idleness
   std::size_t max_clients = 16;
 };

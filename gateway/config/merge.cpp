@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -50,12 +51,8 @@ std::uint32_t fnv1a(const std::string& s) {
 std::optional<std::uint32_t> serial_from_machine_id(const std::string& text) {
   if (text.size() < 8) return std::nullopt;
   std::uint32_t v = 0;
-  for (std::size_t i = 0; i < 8; ++i) {
-    const char ch = text[i];
-    const int d = ch >= '0' && ch <= '9' ? ch - '0' : ch >= 'a' && ch <= 'f' ? ch - 'a' + 10 : ch >= 'A' && ch <= 'F' ? ch - 'A' + 10 : -1;
-    if (d < 0) return std::nullopt;
-    v = v << 4 | static_cast<std::uint32_t>(d);
-  }
+  const auto [end, ec] = std::from_chars(text.data(), text.data() + 8, v, 16);
+  if (ec != std::errc{} || end != text.data() + 8) return std::nullopt;  // 8 hex digits, no sign
   return v;
 }
 
@@ -198,7 +195,7 @@ Config merge(Config c, const CliOptions& cli) {
     // As REST without tokens: every local process is admin (cocomm's reset
     // and lss_* commands work out of the box); with tokens, or reachable
     // from elsewhere, operator unless ascii.role says otherwise.
-    if (!c.ascii.role_set) c.ascii.role = c.http.tokens.empty() && a->local() ? Role::Admin : Role::Operator;
+    if (!c.ascii.role) c.ascii.role = c.http.tokens.empty() && a->local() ? Role::Admin : Role::Operator;
   }
   // The server binds an address, it does not resolve names; "localhost" is
   // the one name everybody means the same by.
