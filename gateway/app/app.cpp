@@ -322,6 +322,7 @@ void App::start() {
                                                                  : canopen::can::BusEventCause::LinkUp;
     n->network->report(opened);
     n->local->start(n->now());  // boot-up (7.2.8.3.3), then heartbeats
+    n->boot_at_start();         // CiA 302-2: the manager's own start boots its nodes
     n->link.start_simulation();
   }
   for (auto& n : nets_) assign_from_config(core_, log_, n->label, n->number, n->cfg.lss_assign, 0);

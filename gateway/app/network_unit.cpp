@@ -298,4 +298,15 @@ void NetworkUnit::remove_node(std::uint8_t id) {
 
 NetworkUnit::~NetworkUnit() = default;
 
+void NetworkUnit::boot_at_start() {
+  if (cfg.boot_at_start != NetworkConfig::BootAtStart::ResetCommunication) return;
+  std::string sent;
+  for (const auto& node : cfg.nodes) {
+    if (!node.boot) continue;
+    network->send_nmt(canopen::NmtCommand::ResetCommunication, node.id);
+    sent += (sent.empty() ? "" : ", ") + std::to_string(node.id);
+  }
+  if (!sent.empty()) log.info(label + " boot at start: NMT reset-communication to node " + sent);
+}
+
 }  // namespace gateway

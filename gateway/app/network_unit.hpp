@@ -154,6 +154,10 @@ struct NetworkUnit {
   void apply_node(const NodeConfig& node, std::optional<canopen::eds::DeviceDescription> description);
   // Forgets a node that only run-time configuration had added.
   void remove_node(std::uint8_t node);
+  // At the gateway's start, after the own boot-up: boot: {at-start:
+  // reset-communication} sends NMT reset-communication to each node with
+  // boot: (their boot-ups then run the sequence); as-found sends nothing.
+  void boot_at_start();
   std::unique_ptr<canopen::Network> network;
   std::unique_ptr<canopen::socketcan::ServiceDriver> driver;
 

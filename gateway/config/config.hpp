@@ -95,6 +95,15 @@ struct NetworkConfig {
   // node with an EDS/DCF that does not set it itself (nodes without boot:
   // get a boot-up sequence that only reads the PDO configuration).
   bool read_pdo_config = false;
+  // boot: {at-start: ...}: what the gateway does at its own start for the
+  // nodes with boot: (CiA 302-2 lets the manager choose). AsFound: nothing
+  // is sent; each node gets its sequence when first heard (pre-operational:
+  // all of it; operational: the identity check only). ResetCommunication:
+  // NMT reset-communication to each such node (one by one, never node 0, so
+  // devices the gateway does not manage are left alone), so every one boots
+  // again and is configured from its boot-up.
+  enum class BootAtStart { AsFound, ResetCommunication };
+  BootAtStart boot_at_start = BootAtStart::AsFound;
   std::vector<NodeConfig> nodes;
   // lss: {assign: [...]}: at start-up each listed device is selected, given
   // its node-ID (and stored); an absent device is logged, never fatal.

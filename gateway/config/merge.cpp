@@ -42,7 +42,7 @@ std::string machine_id_text() {
 // FNV-1a: a serial from the gateway id where the machine has no id.
 std::uint32_t fnv1a(const std::string& s) {
   std::uint32_t h = 2166136261u;
-  for (unsigned char ch : s) h = (h ^ ch) * 16777619u;
+  for (const char ch : s) h = (h ^ static_cast<unsigned char>(ch)) * 16777619u;
   return h;
 }
 

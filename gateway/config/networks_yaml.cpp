@@ -164,8 +164,14 @@ void parse_network(const At& a, NetworkConfig& net, std::uint8_t default_node_id
     if (auto v = t->get("period-ms")) net.time.period = std::chrono::milliseconds(v->integer(10, 86'400'000));
   }
   if (auto b = a.get("boot")) {
-    b->expect_map({"read-pdo-config"});  // the rest of boot: is per node
+    b->expect_map({"read-pdo-config", "at-start"});  // the rest of boot: is per node
     if (auto v = b->get("read-pdo-config")) net.read_pdo_config = v->boolean();
+    if (auto v = b->get("at-start")) {
+      const std::string mode = v->str();
+      if (mode == "as-found") net.boot_at_start = NetworkConfig::BootAtStart::AsFound;
+      else if (mode == "reset-communication") net.boot_at_start = NetworkConfig::BootAtStart::ResetCommunication;
+      else v->fail("'" + mode + "' is not as-found or reset-communication");
+    }
   }
   std::set<int> seen;
   for (const auto& item : a.get("nodes") ? a.get("nodes")->items() : std::vector<At>{}) {

@@ -39,6 +39,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -90,7 +91,11 @@ class Network : public DeadlineSource {
   // Boot-up configuration of `node` (master/boot_configurator.hpp): on each boot-up its
   // identity is checked, its DCF written and it is started, as `config`
   // says; every step is a BootConfigEvent in this network's stream.
-  // config.dcf MUST outlive the network. With read_pdo_config, after the
+  // config.dcf MUST outlive the network. A configured node heard first by
+  // its heartbeat or guarding (powered before the gateway), or back after a
+  // loss in another state, gets the same sequence without its boot-up:
+  // pre-operational the whole of it, operational the identity check and PDO
+  // read only, never a restart (BootConfigurator::on_found()). With read_pdo_config, after the
   // identity check and DCF download and before the NMT start (so no TPDO
   // is decoded with a mapping the device does not use) the node's PDO
   // configuration is read as read_pdo_config() does; the Start and Done
@@ -171,6 +176,7 @@ class Network : public DeadlineSource {
  private:
   void emit(EventBody body, can::Frame::Clock::time_point timestamp);
   void on_boot_event(const BootConfigEvent& ev);
+  static bool found_without_boot_up(const NodeStateEvent& s);
   std::error_code check_transfer(std::uint8_t node) const;
   // The decoder or producer takes the PDO's configuration from pdo_table_.
   void refresh_pdo(std::uint8_t node, pdo::PdoKey key);
@@ -199,6 +205,8 @@ class Network : public DeadlineSource {
   master::ProgramDownloader program_;
   // Nodes whose boot-up reads the PDO configuration -> NMT start afterwards.
   std::map<std::uint8_t, bool> boot_reads_;
+  // Nodes found operational without a boot-up whose check runs: no NMT start after the PDO read.
+  std::set<std::uint8_t> boot_checks_only_;
 };
 
 }  // namespace canopen

@@ -180,10 +180,36 @@ void BootConfigurator::stop(std::uint8_t node, TimePoint now) {
 void BootConfigurator::on_boot_up(std::uint8_t node, TimePoint now) {
   auto it = nodes_.find(node);
   if (it == nodes_.end()) return;
+  begin(node, it->second.config, "reading 1000h and 1018h sub 1-4", {}, now);
+}
+
+bool BootConfigurator::on_found(std::uint8_t node, NmtState state, TimePoint now) {
+  auto it = nodes_.find(node);
+  if (it == nodes_.end() || it->second.run) return false;
+  if (state == NmtState::PreOperational) {
+    begin(node, it->second.config, "found in pre-operational without a boot-up: reading 1000h and 1018h sub 1-4", {},
+          now);
+    return true;
+  }
+  if (state != NmtState::Operational) return false;  // stopped: no SDO (7.3.2.2, table 41)
+  // Running: its configuration was made by whoever started it. Check who it
+  // is, but neither rewrite its parameters under a running machine nor reset it.
+  NodeBootConfig check = it->second.config;
+  check.dcf = nullptr;
+  check.start = false;
+  begin(node, std::move(check), "found operational: reading 1000h and 1018h sub 1-4 (no configuration, no restart)",
+        "already operational: identity checked, not configured or restarted", now);
+  return true;
+}
+
+void BootConfigurator::begin(std::uint8_t node, NodeBootConfig config, std::string identify_detail,
+                             std::string done_detail, TimePoint now) {
   stop(node, now);
+  auto it = nodes_.find(node);
   Run run;
   run.generation = ++generation_;
-  run.config = it->second.config;
+  run.config = std::move(config);
+  run.done_detail = std::move(done_detail);
   const NodeBootConfig& c = run.config;
   run.ops.push_back({OpKind::Read, 0x1000, 0, {}, false, false});
   run.ops.push_back({OpKind::Read, 0x1018, 1, {}, false, false});
@@ -192,7 +218,7 @@ void BootConfigurator::on_boot_up(std::uint8_t node, TimePoint now) {
   run.ops.push_back({OpKind::Read, 0x1018, 4, {}, false, !c.serial});
   const std::uint64_t gen = run.generation;
   it->second.run = std::move(run);
-  emit(node, BootConfigEvent::Step::Identify, "reading 1000h and 1018h sub 1-4");
+  emit(node, BootConfigEvent::Step::Identify, std::move(identify_detail));
   // The event handler may have restarted or removed the sequence.
   it = nodes_.find(node);
   if (it == nodes_.end() || !it->second.run || it->second.run->generation != gen) return;
@@ -352,6 +378,7 @@ void BootConfigurator::finish(std::uint8_t node) {
   NodeState& st = nodes_[node];
   const std::uint64_t gen = st.run->generation;
   const bool start = st.run->config.start;
+  std::string detail = std::move(st.run->done_detail);
   if (start) {
     send_nmt_(NmtCommand::Start, node);
     emit(node, BootConfigEvent::Step::Start);
@@ -359,7 +386,7 @@ void BootConfigurator::finish(std::uint8_t node) {
   const auto it = nodes_.find(node);
   if (it == nodes_.end() || !it->second.run || it->second.run->generation != gen) return;
   it->second.run.reset();
-  emit(node, BootConfigEvent::Step::Done);
+  emit(node, BootConfigEvent::Step::Done, std::move(detail));
 }
 
 void BootConfigurator::fail(std::uint8_t node, std::error_code ec, std::string detail) {

@@ -16,11 +16,20 @@ Network::Network(const od::ObjectDictionary& own, FrameSink sink, EventHandler o
              // Timer-caused events (lost) come without a frame: stamp them now.
              emit(body, ts == can::Frame::Clock::time_point{} ? wall_() : ts);
              // The boot-up is reported before its configuration starts.
-             if (const auto* s = std::get_if<NodeStateEvent>(&body);
-                 s != nullptr && s->cause == NodeStateEvent::Cause::BootUp) {
+             const auto* s = std::get_if<NodeStateEvent>(&body);
+             if (s == nullptr || !boot_) return;
+             if (s->cause == NodeStateEvent::Cause::BootUp) {
                // What a rebooted node answers belongs to its new life.
                pdo_reader_.cancel(s->node, now_);
-               if (boot_) boot_->on_boot_up(s->node, now_);
+               boot_checks_only_.erase(s->node);
+               boot_->on_boot_up(s->node, now_);
+             } else if (found_without_boot_up(*s) && !pdo_reader_.busy(s->node) &&
+                        boot_->on_found(s->node, *s->state, now_)) {
+               if (*s->state == NmtState::Operational) {
+                 boot_checks_only_.insert(s->node);
+               } else {
+                 boot_checks_only_.erase(s->node);
+               }
              }
            }),
       sdo_(sdo_config, sink),
@@ -78,6 +87,7 @@ void Network::remove_node(std::uint8_t node) {
   pdo_table_.remove_node(node);
   if (boot_) boot_->remove(node);
   boot_reads_.erase(node);
+  boot_checks_only_.erase(node);
 }
 
 bool Network::configure_boot(std::uint8_t node, master::NodeBootConfig config, bool read_pdo_config) {
@@ -97,16 +107,31 @@ bool Network::configure_boot(std::uint8_t node, master::NodeBootConfig config, b
   return boot_->configure(node, std::move(config));
 }
 
+bool Network::found_without_boot_up(const NodeStateEvent& s) {
+  using Cause = NodeStateEvent::Cause;
+  if (!s.state) return false;
+  // First heard, and not by its boot-up: it was powered before the gateway listened.
+  if ((s.cause == Cause::Heartbeat || s.cause == Cause::NodeGuarding) && !s.previous) return true;
+  // Back after a loss in another state: it was reset (or power-cycled) while
+  // its boot-up went unheard.
+  return s.cause == Cause::Recovered && s.previous != s.state;
+}
+
 void Network::on_boot_event(const BootConfigEvent& ev) {
+  const bool check_only = boot_checks_only_.count(ev.node) != 0;
+  if (check_only && (ev.step == BootConfigEvent::Step::Done || ev.step == BootConfigEvent::Step::Failed))
+    boot_checks_only_.erase(ev.node);
   const auto it = boot_reads_.find(ev.node);
   if (it == boot_reads_.end() || ev.step != BootConfigEvent::Step::Done) {
     emit(ev, wall_());
     return;
   }
   const std::uint8_t node = ev.node;
-  const bool start = it->second;
+  // An operational node found without a boot-up is read, not restarted.
+  const bool start = it->second && !check_only;
+  std::string found_detail = ev.detail;
   // What the configurator would have done at its end, after the read.
-  auto conclude = [this, node, start](std::error_code failed, const std::string& detail) {
+  auto conclude = [this, node, start, found_detail](std::error_code failed, const std::string& detail) {
     BootConfigEvent e;
     e.node = node;
     if (failed) {
@@ -122,7 +147,7 @@ void Network::on_boot_event(const BootConfigEvent& ev) {
       emit(e, wall_());
     }
     e.step = BootConfigEvent::Step::Done;
-    e.detail = detail;
+    e.detail = found_detail.empty() ? detail : found_detail + "; " + detail;
     emit(e, wall_());
   };
   if (pdo_table_.description(node) == nullptr) {

@@ -26,6 +26,16 @@
 // A boot-up during a running sequence cancels its SDO transfer and restarts
 // the sequence from Identify.
 //
+// Nodes powered before the manager (CiA 302-2: the manager boots every
+// assigned node at its own start, and whenever one appears without a
+// boot-up): the caller calls on_found() when it first hears a configured
+// node by heartbeat or guarding, or hears it again in another state after it
+// was lost. Pre-operational: the whole sequence, as on a boot-up.
+// Operational: the identity check only (no DCF writes, no NMT start; Done's
+// detail says so): whoever started it configured it, and rewriting PDOs
+// under a running machine would disturb it. Stopped: nothing
+// (SDO is not available there). A sequence already running is left alone.
+//
 // Thread safety: none; use from the SdoClient's thread. on_event and
 // send_nmt are called synchronously (from on_boot_up() and from the
 // SdoClient's handlers) and may call back into the configurator.
@@ -130,6 +140,10 @@ class BootConfigurator {
   // The node booted: (re)starts its sequence. Ignored for unconfigured nodes.
   void on_boot_up(std::uint8_t node, TimePoint now);
 
+  // The node was heard in `state` without a boot-up (see above). Returns
+  // whether a sequence started.
+  bool on_found(std::uint8_t node, NmtState state, TimePoint now);
+
   // Whether a sequence is running for the node.
   bool busy(std::uint8_t node) const;
 
@@ -152,12 +166,15 @@ class BootConfigurator {
     std::size_t next = 0;
     std::optional<sdo::RequestId> request;
     std::map<std::uint32_t, std::uint32_t> read;  // (index << 8 | sub) -> value
+    std::string done_detail;                       // the Done event's detail
   };
   struct NodeState {
     NodeBootConfig config;
     std::optional<Run> run;
   };
 
+  void begin(std::uint8_t node, NodeBootConfig config, std::string identify_detail, std::string done_detail,
+             TimePoint now);
   void step(std::uint8_t node, TimePoint now);
   void submit(std::uint8_t node, const Op& op, bool invalidate_write, TimePoint now);
   void on_done(std::uint8_t node, std::uint64_t generation, bool invalidate_write, sdo::TransferResult&& r);

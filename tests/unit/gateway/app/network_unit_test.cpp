@@ -122,5 +122,44 @@ TEST(NetworkUnit, AnNmtCommandToAllNodesReachesTheOwnNode) {
       << "7.2.8.3.1: node-ID 0 addresses every node, the gateway's own too";
 }
 
+// Issue 28 item 1, CiA 302-2: the manager may reset the communication of
+// its nodes at its own start so that each boots (and is configured) again;
+// one by one, so that a device the gateway does not manage is never reset.
+TEST(NetworkUnit, BootAtStartResetCommunicationResetsEachBootNodeAndNoOther) {
+  UnitRig r;
+  ASSERT_GE(r.unit->cfg.nodes.size(), 2U);
+  r.unit->cfg.nodes[0].boot = BootConfig{};
+  r.unit->cfg.nodes[1].boot.reset();
+  std::vector<std::uint8_t> with_boot;
+  for (const auto& n : r.unit->cfg.nodes)
+    if (n.boot) with_boot.push_back(n.id);
+  const auto nmt_frames = [&] {
+    std::vector<canopen::can::Frame> out;
+    for (const auto& f : r.seen)
+      if (f.id == 0x000) out.push_back(f);
+    return out;
+  };
+
+  r.unit->boot_at_start();  // as-found, the default: nothing
+  r.io.restart();
+  r.io.run_for(20ms);
+  EXPECT_TRUE(nmt_frames().empty()) << "as-found sends no NMT";
+
+  r.unit->cfg.boot_at_start = NetworkConfig::BootAtStart::ResetCommunication;
+  r.unit->boot_at_start();
+  ASSERT_TRUE(r.run_until([&] { return !nmt_frames().empty(); }));
+  r.io.restart();
+  r.io.run_for(20ms);
+  const auto sent = nmt_frames();
+  std::vector<std::uint8_t> reset;
+  for (const auto& f : sent) {
+    EXPECT_EQ(f.len, 2);
+    EXPECT_EQ(f.data[0], 0x82) << "reset communication (7.2.8.3.1)";
+    reset.push_back(f.data[1]);
+  }
+  EXPECT_EQ(reset, with_boot) << "each node with boot:, addressed one by one, never node 0; node "
+                              << static_cast<int>(r.unit->cfg.nodes[1].id) << " (no boot:) left alone";
+}
+
 }  // namespace
 }  // namespace gateway

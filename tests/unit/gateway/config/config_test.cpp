@@ -530,6 +530,20 @@ TEST(Config, ReadPdoConfigPerNetworkAndPerNode) {
               HasSubstr("networks[0].boot.start: unknown key"));
 }
 
+// Issue 28 item 1 (CiA 302-2): at its start the manager boots nodes as it
+// finds them (default) or resets their communication first.
+TEST(Config, BootAtStartIsAsFoundUnlessResetCommunicationIsAsked) {
+  const Config c = parse_config("networks:\n  - interface: can0\n  - interface: can1\n    boot: {at-start: as-found}\n"
+                                "  - interface: can2\n    boot: {at-start: reset-communication}\n",
+                                "gw.yaml");
+  ASSERT_EQ(c.networks.size(), 3U);
+  EXPECT_EQ(c.networks[0].boot_at_start, NetworkConfig::BootAtStart::AsFound);
+  EXPECT_EQ(c.networks[1].boot_at_start, NetworkConfig::BootAtStart::AsFound);
+  EXPECT_EQ(c.networks[2].boot_at_start, NetworkConfig::BootAtStart::ResetCommunication);
+  EXPECT_THAT(config_error("networks:\n  - interface: can0\n    boot: {at-start: reset-node}\n"),
+              HasSubstr("'reset-node' is not as-found or reset-communication"));
+}
+
 TEST(Config, FlagsWinOverTheFile) {
   Config file = parse_config("gateway: {id: from-file, node-id: 100, log-level: warn}\n"
                              "networks:\n  - interface: can0\n    heartbeat-ms: 250\n  - interface: can1\n"

@@ -420,6 +420,62 @@ TEST(BootConfigurator, UnconfiguredNode_BootUpIgnored) {
   EXPECT_FALSE(n.boot->configure(128, {}));
 }
 
+// Issue 28 item 1 (CiA 302-2): a node found without a boot-up, powered
+// before the manager. Its boot-up went out before the configuration existed.
+TEST(BootConfigurator, FoundPreOperational_RunsTheWholeSequence) {
+  Network n;
+  n.slave->start(n.clock.now());
+  n.run_for(200ms);  // boot-up ignored: not configured yet
+  ASSERT_TRUE(n.boot->configure(kNode, boot_config_from_dcf(n.dcf)));
+  EXPECT_TRUE(n.boot->on_found(kNode, NmtState::PreOperational, n.clock.now()));
+  EXPECT_FALSE(n.boot->on_found(kNode, NmtState::PreOperational, n.clock.now())) << "a running sequence is left alone";
+  n.run_for(2s);
+  EXPECT_EQ(n.steps(), (std::vector<Step>{Step::Identify, Step::CheckIdentity, Step::Configure, Step::Start,
+                                          Step::Done}));
+  n.expect_device_configured();
+  EXPECT_EQ(n.nmt_sent, std::vector<NmtCommand>{NmtCommand::Start});
+  EXPECT_EQ(n.slave->state(), NmtSlave::State::Operational);
+}
+
+TEST(BootConfigurator, FoundOperational_IdentityCheckedOnly_NotConfiguredOrRestarted) {
+  Network n;
+  n.slave->start(n.clock.now());
+  n.run_for(200ms);
+  n.master->send_command(NmtCommand::Start, kNode);  // another master started it
+  n.run_for(200ms);
+  ASSERT_EQ(n.slave->state(), NmtSlave::State::Operational);
+  const auto heartbeat_before = device_u(n, 0x1017, 0);
+  ASSERT_NE(heartbeat_before, n.dcf.od.get_unsigned(0x1017, 0).value()) << "the DCF would change 1017h";
+  ASSERT_TRUE(n.boot->configure(kNode, boot_config_from_dcf(n.dcf)));
+  EXPECT_TRUE(n.boot->on_found(kNode, NmtState::Operational, n.clock.now()));
+  n.run_for(2s);
+  EXPECT_EQ(n.steps(), (std::vector<Step>{Step::Identify, Step::CheckIdentity, Step::Done}));
+  EXPECT_EQ(n.events.back().event.detail, "already operational: identity checked, not configured or restarted");
+  EXPECT_EQ(device_u(n, 0x1017, 0), heartbeat_before) << "nothing written";
+  EXPECT_TRUE(n.nmt_sent.empty()) << "the configurator sent no NMT command";
+  EXPECT_EQ(n.slave->state(), NmtSlave::State::Operational);
+
+  // Its identity is still checked: the wrong device fails.
+  n.events.clear();
+  auto wrong = boot_config_from_dcf(n.dcf);
+  wrong.serial = kSerial + 1;
+  n.boot->configure(kNode, wrong);
+  EXPECT_TRUE(n.boot->on_found(kNode, NmtState::Operational, n.clock.now()));
+  n.run_for(2s);
+  ASSERT_EQ(n.steps(), (std::vector<Step>{Step::Identify, Step::Failed}));
+  EXPECT_EQ(n.events.back().event.error, make_error_code(BootError::SerialNumberMismatch));
+}
+
+TEST(BootConfigurator, FoundStoppedOrUnconfigured_NothingStarts) {
+  Network n;
+  EXPECT_FALSE(n.boot->on_found(kNode, NmtState::PreOperational, n.clock.now())) << "not configured";
+  n.boot->configure(kNode, boot_config_from_dcf(n.dcf));
+  EXPECT_FALSE(n.boot->on_found(kNode, NmtState::Stopped, n.clock.now())) << "no SDO in stopped (7.3.2.2)";
+  n.run_for(1s);
+  EXPECT_TRUE(n.events.empty());
+  EXPECT_FALSE(n.boot->busy(kNode));
+}
+
 TEST(BootConfigPlan, StoreRestoreAndReadOnlyEntriesNeverWritten_HeartbeatAlways) {
   const auto dcf = eds::load_device_description(source_path("tests/support/eds/cia402-drive-node5.dcf"));
   const auto plan = plan_configuration(dcf);

@@ -37,6 +37,7 @@ struct NetworkRig {
         if (device) device->on_frame(f, clock.now());
     });
     gw_ep->on_frames([this](std::span<const can::Frame> fs) {
+      if (!gateway_listens) return;
       for (const auto& f : fs) net.on_frame(f, clock.now());
     });
   }
@@ -100,7 +101,15 @@ struct NetworkRig {
   od::ObjectDictionary device_od;
   std::unique_ptr<Device> device;
   std::vector<Event> events;
-  Network net{own, [this](const can::Frame& f) { gw_ep->send(f); }, [this](const Event& e) { events.push_back(e); }};
+  // false: the gateway is not running yet (it hears nothing).
+  bool gateway_listens = true;
+  std::vector<can::Frame> sent;  // every frame the network put on the bus
+  Network net{own,
+              [this](const can::Frame& f) {
+                sent.push_back(f);
+                gw_ep->send(f);
+              },
+              [this](const Event& e) { events.push_back(e); }};
 };
 
 }  // namespace canopen::test

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <variant>
 #include <vector>
 
@@ -308,6 +309,114 @@ TEST(Network, A1017hWrittenByTheGatewayIsTheWatchedPeriodAtOnce) {
   // A write the device refuses changes nothing.
   ASSERT_TRUE(rig.write(0x1017, 1, {0x10, 0x00}));
   EXPECT_EQ(rig.net.nmt().auto_watch_period(test::NetworkRig::kNode), 3000ms);
+}
+
+// Issue 28 item 1 (CiA 302-2: the manager boots every assigned node at its
+// own start, and whenever one appears without a boot-up). Devices power up
+// before the gateway listens, so their boot-up goes unheard.
+struct PoweredFirst : test::NetworkRig {
+  static constexpr std::uint8_t kNode = test::NetworkRig::kNode;
+  PoweredFirst() : NetworkRig("deploy/eds/cia401-io-module.eds") {
+    (void)net.add_node(kNode, eds.od);
+    gateway_listens = false;
+    power_on();
+    run_for(100ms);  // its boot-up: nobody listens yet
+  }
+  // The gateway starts: it hears what the device sends from now on.
+  void gateway_starts(Duration d = 3s) {
+    gateway_listens = true;
+    run_for(d);
+  }
+  std::vector<BootConfigEvent::Step> steps() const {
+    std::vector<BootConfigEvent::Step> out;
+    for (const auto& b : bodies<BootConfigEvent>()) out.push_back(b.step);
+    return out;
+  }
+  std::size_t sent_with(std::uint32_t id, std::uint8_t byte0_mask, std::uint8_t byte0) const {
+    return static_cast<std::size_t>(std::count_if(sent.begin(), sent.end(), [&](const can::Frame& f) {
+      return f.id == id && f.len > 0 && (f.data[0] & byte0_mask) == byte0;
+    }));
+  }
+  std::size_t nmt_sent() const { return sent_with(0x000, 0x00, 0x00); }
+  std::size_t sdo_downloads() const { return sent_with(0x600 + kNode, 0xE0, 0x20); }  // ccs 1 (7.2.4.3.3)
+  std::size_t sdo_uploads() const { return sent_with(0x600 + kNode, 0xE0, 0x40); }    // ccs 2 (7.2.4.3.5)
+};
+
+TEST(Network, APreOperationalNodeHeardFirstByItsHeartbeatIsBootedAsOnABootUp_Cia302_2) {
+  PoweredFirst rig;
+  ASSERT_EQ(rig.device->state(), NmtState::PreOperational);
+  ASSERT_TRUE(rig.net.configure_boot(PoweredFirst::kNode, master::boot_config_from_dcf(rig.eds)));
+  rig.gateway_starts();
+  using S = BootConfigEvent::Step;
+  EXPECT_EQ(rig.steps(), (std::vector<S>{S::Identify, S::CheckIdentity, S::Configure, S::Start, S::Done}));
+  EXPECT_NE(rig.bodies<BootConfigEvent>().front().detail.find("without a boot-up"), std::string::npos);
+  EXPECT_GE(rig.sdo_downloads(), 1U) << "its configuration is written";
+  EXPECT_EQ(rig.nmt_sent(), 1U);
+  EXPECT_EQ(rig.device->state(), NmtState::Operational);
+  // Heard again in the same state: nothing runs twice.
+  const auto before = rig.sent.size();
+  rig.run_for(5s);
+  EXPECT_EQ(rig.steps().size(), 5U);
+  EXPECT_EQ(rig.sent.size(), before);
+}
+
+// A running machine: the node is checked, not reconfigured or restarted.
+TEST(Network, AnOperationalNodeHeardFirstIsIdentifiedAndItsPdosReadButNotWrittenOrRestarted_Cia302_2) {
+  PoweredFirst rig;
+  rig.device->command(NmtCommand::Start, rig.clock.now());  // started by another master, or by itself
+  ASSERT_EQ(rig.device->state(), NmtState::Operational);
+  ASSERT_TRUE(rig.net.configure_boot(PoweredFirst::kNode, master::boot_config_from_dcf(rig.eds), true));
+  rig.gateway_starts();
+  using S = BootConfigEvent::Step;
+  ASSERT_EQ(rig.steps(), (std::vector<S>{S::Identify, S::CheckIdentity, S::Done}));
+  const auto boots = rig.bodies<BootConfigEvent>();
+  ASSERT_TRUE(boots[1].identity);
+  EXPECT_EQ(boots[1].identity->vendor_id, rig.eds.od.get_unsigned(0x1018, 1).value());
+  EXPECT_NE(boots.back().detail.find("already operational"), std::string::npos) << boots.back().detail;
+  EXPECT_GT(rig.sdo_uploads(), 5U) << "identity and PDO configuration are read";
+  EXPECT_EQ(rig.sdo_downloads(), 0U) << "nothing is written to a running node";
+  EXPECT_EQ(rig.nmt_sent(), 0U) << "a running node is not reset or started";
+  EXPECT_EQ(rig.device->state(), NmtState::Operational);
+  bool from_device = false;
+  for (const auto* p : rig.net.pdo_config().pdos(PoweredFirst::kNode))
+    from_device = from_device || p->source == pdo::ConfigSource::Device;
+  EXPECT_TRUE(from_device) << "the PDO mapping in use is the device's";
+}
+
+TEST(Network, AStoppedNodeOrOneWithoutBootConfigurationIsOnlyWatched_Cia302_2) {
+  for (const bool configured : {true, false}) {
+    PoweredFirst rig;
+    if (configured) {
+      rig.device->command(NmtCommand::Stop, rig.clock.now());  // no SDO in stopped (7.3.2.2)
+      ASSERT_TRUE(rig.net.configure_boot(PoweredFirst::kNode, master::boot_config_from_dcf(rig.eds)));
+    }
+    rig.gateway_starts();
+    EXPECT_TRUE(rig.bodies<BootConfigEvent>().empty()) << configured;
+    EXPECT_TRUE(rig.sent.empty()) << configured;
+    EXPECT_FALSE(rig.bodies<HeartbeatEvent>().empty()) << "it is watched";
+  }
+}
+
+// Reset while the gateway did not hear it (cable out, power cycle): back in
+// pre-operational after a loss, it is booted again.
+TEST(Network, ANodeBackInPreOperationalAfterALossIsBootedAgain_Cia302_2) {
+  PoweredFirst rig;
+  ASSERT_TRUE(rig.net.nmt().set_auto_watch(PoweredFirst::kNode, true, nmt::producer_heartbeat_time(rig.eds.od)));
+  ASSERT_TRUE(rig.net.configure_boot(PoweredFirst::kNode, master::boot_config_from_dcf(rig.eds)));
+  rig.gateway_starts();
+  ASSERT_EQ(rig.device->state(), NmtState::Operational);
+  rig.gateway_listens = false;
+  rig.run_for(5s);  // lost
+  rig.power_on();   // its boot-up goes unheard
+  rig.run_for(100ms);
+  rig.events.clear();
+  rig.gateway_starts();
+  const auto states = rig.bodies<NodeStateEvent>();
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.front().cause, NodeStateEvent::Cause::Recovered);
+  using S = BootConfigEvent::Step;
+  EXPECT_EQ(rig.steps(), (std::vector<S>{S::Identify, S::CheckIdentity, S::Configure, S::Start, S::Done}));
+  EXPECT_EQ(rig.device->state(), NmtState::Operational);
 }
 
 }  // namespace
