@@ -37,12 +37,19 @@ class HttpSession final : public Connection {
       : Connection(std::move(impl), std::move(slot), std::move(peer), std::is_same_v<Stream, TlsStream>),
         stream_(std::move(stream)) {}
 
+  // The stream's deadline `d` from now: beast's expires_after() reads the
+  // clock once for each of its two timers; a clock read is a system call on
+  // some kernels (user-mode Linux), and this runs several times a request.
+  void expire_in(std::chrono::steady_clock::duration d) {
+    beast::get_lowest_layer(stream_).expires_at(std::chrono::steady_clock::now() + d);
+  }
+
   void run() {
     registered();
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     if constexpr (std::is_same_v<Stream, TlsStream>) {
       set_idle(true);  // no request yet; whether a handshake has begun is unknown
-      beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+      expire_in(impl_->cfg.read_timeout);
       stream_.async_handshake(net::ssl::stream_base::server, [self](error_code ec) {
         if (ec) {
           self->impl_->counters.tls_failures.fetch_add(1, std::memory_order_relaxed);
@@ -81,7 +88,7 @@ class HttpSession final : public Connection {
     // Idle until the first byte: this connection may be closed for a new
     // one meanwhile (Impl::evict_idle).
     set_idle(true);
-    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.idle_timeout);
+    expire_in(impl_->cfg.idle_timeout);
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     stream_.async_read_some(buffer_.prepare(kFirstRead), [self](error_code ec, std::size_t n) {
       self->set_idle(false);
@@ -93,7 +100,7 @@ class HttpSession final : public Connection {
 
   // From the request's first byte, the whole header within header_timeout.
   void read_header() {
-    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.header_timeout);
+    expire_in(impl_->cfg.header_timeout);
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     bhttp::async_read_header(stream_, buffer_, *parser_, [self](error_code ec, std::size_t) {
       if (ec == beast::error::timeout) {
@@ -109,7 +116,7 @@ class HttpSession final : public Connection {
       on_read_error(ec);
       return;
     }
-    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+    expire_in(impl_->cfg.read_timeout);
     const auto& req = parser_->get();
     head_ = req.method() == bhttp::verb::head;
     version_ = req.version();
@@ -191,7 +198,7 @@ class HttpSession final : public Connection {
 
   void write(BeastResponse&& res) override {
     res_ = std::move(res);
-    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+    expire_in(impl_->cfg.read_timeout);
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     bhttp::async_write(stream_, res_, [self](error_code ec, std::size_t) {
       if (ec) return self->close_now();
@@ -204,7 +211,7 @@ class HttpSession final : public Connection {
   void write_stream_head(std::unique_ptr<StreamHead> head) override {
     stream_head_ = std::move(head);
     stream_sr_.emplace(*stream_head_);
-    beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+    expire_in(impl_->cfg.read_timeout);
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
     bhttp::async_write_header(stream_, *stream_sr_, [self](error_code ec, std::size_t) {
       // The body takes as long as the route says; a client that does not
@@ -220,7 +227,7 @@ class HttpSession final : public Connection {
     auto done = [self](error_code ec, std::size_t) { self->stream_written(ec); };
     if (last) {
       // What is left to send must go out in time; then the close.
-      beast::get_lowest_layer(stream_).expires_after(impl_->cfg.read_timeout);
+      expire_in(impl_->cfg.read_timeout);
       if (chunked_) return net::async_write(stream_, bhttp::make_chunk_last(), std::move(done));
       return net::post(impl_->ioc, [done] { done({}, 0); });
     }
@@ -242,7 +249,7 @@ class HttpSession final : public Connection {
     // with the client's close (or the grace time).
     ending_ = true;
     out_ = {};
-    beast::get_lowest_layer(stream_).expires_after(kCloseGrace);
+    expire_in(kCloseGrace);
     if constexpr (!std::is_same_v<Stream, TlsStream>) {
       error_code ignored;
       stream_.socket().shutdown(tcp::socket::shutdown_send, ignored);
@@ -259,7 +266,7 @@ class HttpSession final : public Connection {
   // abrupt close with unread input would send a reset and could destroy it).
   void graceful_close() {
     auto self = std::static_pointer_cast<HttpSession>(shared_from_this());
-    beast::get_lowest_layer(stream_).expires_after(kCloseGrace);
+    expire_in(kCloseGrace);
     if constexpr (std::is_same_v<Stream, TlsStream>) {
       stream_.async_shutdown([self](error_code) { self->close_now(); });
     } else {

@@ -1,12 +1,17 @@
 #include "trace/tapped_channel.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace gateway::trace {
 
 TappedChannel::TappedChannel(canopen::can::Channel& inner, NetworkTrace& trace) : inner_(inner), trace_(trace) {
   inner_.on_frames([this](std::span<const canopen::can::Frame> frames) {
-    trace_.received(frames, std::chrono::steady_clock::now(), std::chrono::system_clock::now());
+    // The wall clock only stamps frames without the kernel's time (SocketCAN
+    // gives each one): a clock read is a system call on some kernels.
+    const bool stamped = std::all_of(frames.begin(), frames.end(),
+                                     [](const canopen::can::Frame& f) { return f.timestamp != WallTime{}; });
+    trace_.received(frames, std::chrono::steady_clock::now(), stamped ? WallTime{} : std::chrono::system_clock::now());
     deliver(frames);
   });
   inner_.on_bus_event([this](const canopen::can::BusEvent& ev) { report(ev); });

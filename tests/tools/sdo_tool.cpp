@@ -4,19 +4,25 @@
 //   sdo_tool serve IFACE NODE
 //       serves the gateway dictionary of NODE plus test objects:
 //       2000h DOMAIN rw (1 MiB pattern), 2001h VISIBLE_STRING rw, 2002h UNSIGNED32 rw
-//   sdo_tool upload IFACE NODE INDEX SUB [--mode M] [--out FILE] [--timeout MS]
+//   sdo_tool upload IFACE NODE INDEX SUB [--mode M] [--out FILE] [--timeout MS] [--repeat N]
 //   sdo_tool download IFACE NODE INDEX SUB (--hex HEX | --file FILE) [--mode M] [--timeout MS]
 //       M: auto (default), expedited, segmented, block
 //       prints "ok SIZE crc XXXX" (CRC-16 of CiA 301 7.2.4.3.16 over the data),
 //       for uploads without --out also "data HEX"; on failure prints
 //       "abort XXXXXXXX (remote|local): text" and exits 1.
+//       --repeat N: N more uploads one after the other (bench/sdo_latency.sh:
+//       the round trip without any front end), then one line
+//       "latency n=N mean=M ms p50=.. p90=.. p99=.. max=.." over those N.
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/post.hpp>
 #include <boost/asio/signal_set.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cstdio>
+#include <numeric>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -126,8 +132,10 @@ int transfer(bool upload, const std::vector<std::string>& a) {
   req.sub = static_cast<std::uint8_t>(parse_number(a[4]));
   std::string out_file;
   Bytes data;
+  std::size_t repeat = 0;
   for (std::size_t i = 5; i + 1 < a.size(); i += 2) {
     if (a[i] == "--mode") req.mode = parse_mode(a[i + 1]);
+    else if (a[i] == "--repeat" && upload) repeat = static_cast<std::size_t>(parse_number(a[i + 1]));
     else if (a[i] == "--out") out_file = a[i + 1];
     else if (a[i] == "--timeout") req.timeout = std::chrono::milliseconds(parse_number(a[i + 1]));
     else if (a[i] == "--hex") data = from_hex(a[i + 1]);
@@ -144,7 +152,32 @@ int transfer(bool upload, const std::vector<std::string>& a) {
   // The download data is moved into the client: summarise it first.
   const std::size_t down_size = data.size();
   const std::uint16_t down_crc = canopen::sdo::crc16(data);
-  req.on_done = [&](canopen::sdo::TransferResult&& r) {
+  const canopen::sdo::Request again = req;
+  std::vector<double> ms;
+  canopen::TimePoint started{};
+  std::function<void(canopen::sdo::TransferResult&&)> done;
+  done = [&](canopen::sdo::TransferResult&& r) {
+    if (r.ok() && ms.size() < repeat) {
+      const auto t = canopen::SteadyClock::now();
+      // The first (the one printed below) is not counted: it warms up.
+      if (started != canopen::TimePoint{}) ms.push_back(std::chrono::duration<double, std::milli>(t - started).count());
+      started = canopen::SteadyClock::now();
+      canopen::sdo::Request next = again;
+      next.on_done = done;
+      if (client.upload(std::move(next), started)) return;
+      std::fprintf(stderr, "sdo_tool: the next upload was refused\n");
+      r.error = make_error_code(canopen::SdoAbort::GeneralError);
+    }
+    if (!ms.empty()) {
+      std::vector<double> sorted = ms;
+      std::sort(sorted.begin(), sorted.end());
+      const auto pick = [&](double q) {
+        return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
+      };
+      std::printf("latency n=%zu mean=%.3f ms p50=%.3f p90=%.3f p99=%.3f max=%.3f\n", sorted.size(),
+                  std::accumulate(sorted.begin(), sorted.end(), 0.0) / static_cast<double>(sorted.size()), pick(0.5),
+                  pick(0.9), pick(0.99), sorted.back());
+    }
     if (r.ok()) {
       if (upload) std::printf("ok %zu crc %04x\n", r.data.size(), canopen::sdo::crc16(r.data));
       else std::printf("ok %zu crc %04x\n", down_size, down_crc);
@@ -165,6 +198,7 @@ int transfer(bool upload, const std::vector<std::string>& a) {
       bus.stop();
     });
   };
+  req.on_done = done;
   const auto now = canopen::SteadyClock::now();
   auto id = upload ? client.upload(std::move(req), now) : client.download(std::move(req), std::move(data), now);
   if (!id) {

@@ -188,7 +188,8 @@ void SocketCanChannel::on_readable() {
       const Decoded d = decode(rx_raw_[static_cast<unsigned>(i)], rx_msgs_[static_cast<unsigned>(i)].msg_len);
       if (d.kind == RawKind::Data) {
         rx_batch_.push_back(d.frame);
-        rx_batch_.back().timestamp = meta.timestamp.value_or(can::Frame::Clock::now());
+        // The kernel's time when it gave one; the clock only when not.
+        rx_batch_.back().timestamp = meta.timestamp ? *meta.timestamp : can::Frame::Clock::now();
       } else if (d.kind == RawKind::Error) {
         // Keep bus order: frames before the error frame are delivered first.
         stats_.rx_frames += rx_batch_.size();
