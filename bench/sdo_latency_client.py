@@ -9,7 +9,6 @@ and exits 1 when any answer is not a value.
 REQUEST is a CiA 309-3 request without its sequence, e.g. "5 read 0x1017 0 u16";
 each is sent as "[k] REQUEST" and its answer line "[k] VALUE" awaited.
 """
-import http.client
 import socket
 import statistics
 import sys
@@ -24,18 +23,37 @@ def report(label, times):
 
 
 def rest(label, host, port, path, n):
-    c = http.client.HTTPConnection(host, int(port))
-    c.connect()
-    c.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    # A raw HTTP/1.1 keep-alive client, as lean as the ASCII one below
+    # (http.client costs the client ~0.3 ms a request under UML).
+    s = socket.create_connection((host, int(port)))
+    s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    request = ("GET %s HTTP/1.1\r\nHost: %s\r\n\r\n" % (path, host)).encode()
+    buf = b""
     times = []
     for _ in range(10 + n):  # 10 to warm up (connection, caches)
         t0 = time.perf_counter()
-        c.request("GET", path)
-        r = c.getresponse()
-        body = r.read()
+        s.sendall(request)
+        while b"\r\n\r\n" not in buf:
+            chunk = s.recv(65536)
+            if not chunk:
+                sys.exit("%s: connection closed" % label)
+            buf += chunk
+        head, buf = buf.split(b"\r\n\r\n", 1)
+        length = 0
+        for line in head.split(b"\r\n")[1:]:
+            k, _, v = line.partition(b":")
+            if k.strip().lower() == b"content-length":
+                length = int(v)
+        while len(buf) < length:
+            chunk = s.recv(65536)
+            if not chunk:
+                sys.exit("%s: connection closed" % label)
+            buf += chunk
+        body, buf = buf[:length], buf[length:]
         t1 = time.perf_counter()
-        if r.status != 200:
-            sys.exit("%s: HTTP %d %s" % (label, r.status, body[:200]))
+        status = head.split(b" ", 2)[1]
+        if status != b"200":
+            sys.exit("%s: HTTP %s %s" % (label, status.decode(), body[:200]))
         times.append(t1 - t0)
     report(label, times[10:])
 

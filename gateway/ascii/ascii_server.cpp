@@ -146,7 +146,7 @@ class Session : public std::enable_shared_from_this<Session> {
   std::size_t buffered() const { return out_.size() + (writing_ ? wbuf_.size() : 0); }
 
   void start() {
-    touch();
+    last_activity_ = std::chrono::steady_clock::now();
     arm_timer();
     read_more();
   }
@@ -162,19 +162,29 @@ class Session : public std::enable_shared_from_this<Session> {
   }
 
  private:
-  void touch() { last_activity_ = std::chrono::steady_clock::now(); }
+  // Marks activity without reading the clock (a system call on some
+  // kernels, and this runs several times a command): the idle timer reads
+  // it, every eighth of the timeout, so a connection closes between
+  // idle_timeout and 9/8 of it after its last activity.
+  void touch() { touched_ = true; }
 
   void arm_timer() {
     if (cfg_.idle_timeout.count() <= 0 || closed_) return;
-    timer_.expires_at(last_activity_ + cfg_.idle_timeout);
+    const auto tick = std::max<std::chrono::steady_clock::duration>(
+        std::chrono::duration_cast<std::chrono::steady_clock::duration>(cfg_.idle_timeout) / 8,
+        std::chrono::milliseconds(1));
+    timer_.expires_after(tick);
     timer_.async_wait([self = shared_from_this()](const boost::system::error_code& ec) {
       if (ec || self->closed_) return;
-      const bool expired = std::chrono::steady_clock::now() >= self->last_activity_ + self->cfg_.idle_timeout;
+      const auto now = std::chrono::steady_clock::now();
       // A command the core is still running (an SDO transfer waits for its
       // own timeout) is not idleness; output that does not move is.
       const bool waiting_for_core = self->busy_ && !self->stream_;
-      if (expired && !waiting_for_core) return self->close();
-      if (waiting_for_core) self->touch();
+      if (self->touched_ || waiting_for_core) {
+        self->touched_ = false;
+        self->last_activity_ = now;
+      }
+      if (now >= self->last_activity_ + self->cfg_.idle_timeout) return self->close();
       self->arm_timer();
     });
   }
@@ -417,7 +427,8 @@ class Session : public std::enable_shared_from_this<Session> {
   std::string out_;   // answers not yet handed to the socket
   std::string wbuf_;  // the piece being written
   bool reading_ = false, writing_ = false, busy_ = false, input_done_ = false, closed_ = false;
-  std::chrono::steady_clock::time_point last_activity_;
+  std::chrono::steady_clock::time_point last_activity_;  // as the idle timer last saw it
+  bool touched_ = false;                                  // activity since the idle timer last looked
 };
 
 void Server::Impl::accept() {

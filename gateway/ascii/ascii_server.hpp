@@ -11,7 +11,7 @@
 // Limits: a line longer than max_line is answered ERROR:600 and the rest of
 // it discarded; at most max_clients connections (more are closed at once);
 // a connection idle (nothing read or written, no command running) for
-// idle_timeout is closed; output is bounded: a large value read is printed
+// idle_timeout (checked every eighth of it) is closed; output is bounded: a large value read is printed
 // piece by piece while the client takes it, and a client that stops
 // reading is no longer read from (its commands wait), and is closed when
 // its output has not moved for idle_timeout. Others are served meanwhile.

@@ -78,6 +78,7 @@ class RateLimiter {
   // True when the request may go ahead (and takes a token); false: 429.
   bool allow(std::string_view client, Clock::time_point now);
   std::size_t clients() const { return buckets_.size(); }
+  bool unlimited() const { return rate_ <= 0; }  // then allow() needs no time
 
  private:
   struct Bucket {

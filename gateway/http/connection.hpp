@@ -91,7 +91,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
   ~Connection() override;
 
   void registered() { impl_->connections[id_] = weak_from_this(); }
-  std::optional<SteadyTime> idle_since() const override { return idle_since_; }
+  std::optional<std::uint64_t> idle_since() const override { return idle_since_; }
   bool from_address(const std::string& key) const override { return slot_ && slot_->address() == key; }
 
   // Sends `r` for the current request; ignored when it is not `pending`.
@@ -146,7 +146,7 @@ class Connection : public Closable, public std::enable_shared_from_this<Connecti
   SlotPtr slot_;
   std::string peer_;
   bool tls_;
-  std::optional<SteadyTime> idle_since_;
+  std::optional<std::uint64_t> idle_since_;  // Impl::idle_order when it became idle
   bool keep_alive_ = true;
   bool head_ = false;
   unsigned version_ = 11;

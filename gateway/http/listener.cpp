@@ -92,7 +92,7 @@ void HttpServer::Impl::on_accept(error_code ec, tcp::socket socket) {
 // Closes the connection that has waited longest for a request, if any.
 bool HttpServer::Impl::evict_idle(const std::string* key) {
   std::shared_ptr<Closable> oldest;
-  SteadyTime since{};
+  std::uint64_t since = 0;
   for (auto& [id, w] : connections) {
     auto c = w.lock();
     if (!c || (key && !c->from_address(*key))) continue;

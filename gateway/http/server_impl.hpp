@@ -56,9 +56,10 @@ class Closable {
  public:
   virtual ~Closable() = default;
   virtual void shutdown() = 0;
-  // Since when it has been waiting for a request (nullopt: busy, or not an
-  // HTTP connection): such a connection may be closed for a new one.
-  virtual std::optional<SteadyTime> idle_since() const { return std::nullopt; }
+  // When it began waiting for a request, as a number that grows with time
+  // (nullopt: busy, or not an HTTP connection): such a connection may be
+  // closed for a new one, the one waiting longest (the lowest) first.
+  virtual std::optional<std::uint64_t> idle_since() const { return std::nullopt; }
   // Whether it is a connection from client address `key` (address_key).
   virtual bool from_address(const std::string& /*key*/) const { return false; }
 };
@@ -97,6 +98,7 @@ struct HttpServer::Impl : std::enable_shared_from_this<HttpServer::Impl> {
   bool stopped = false;
   std::uint64_t next_id = 1;
   std::unordered_map<std::uint64_t, std::weak_ptr<Closable>> connections;
+  std::uint64_t idle_order = 0;  // Connection::idle_since(): counts idle starts
   std::unordered_map<std::uint64_t, std::weak_ptr<WsClient>> ws_clients;
   std::vector<std::shared_ptr<WsClient>> publish_scratch;
   // Open connections (HTTP and WebSocket) per client address (address_key).
