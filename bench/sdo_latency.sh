@@ -37,7 +37,6 @@ if [ -n "$CANOPEND" ]; then
   "$CANOPEND" vcan0 -i 3 -c "tcp-$CON_PORT" -s $T/co3_ > $T/canopend.log 2>&1 &
 fi
 for i in $(seq 100); do
-  grep -q "^ready" $T/device.out && grep -q "canopen-gateway started" $T/gw.log 2>/dev/null && break
   # --log-level warn hides the started line: ask the REST port instead.
   /usr/bin/python3 -c "import socket; socket.create_connection((\"127.0.0.1\", $HTTP_PORT), 0.2)" 2>/dev/null &&
     grep -q "^ready" $T/device.out && break

@@ -22,6 +22,16 @@ def report(label, times):
           (label, len(ms), statistics.fmean(ms), pick(0.5), pick(0.9), pick(0.99), ms[-1]), flush=True)
 
 
+def receive_until(s, buf, label, enough):
+    """Reads from s onto buf until enough(buf); exits when the peer closes."""
+    while not enough(buf):
+        chunk = s.recv(65536)
+        if not chunk:
+            sys.exit("%s: connection closed" % label)
+        buf += chunk
+    return buf
+
+
 def rest(label, host, port, path, n):
     # A raw HTTP/1.1 keep-alive client, as lean as the ASCII one below
     # (http.client costs the client ~0.3 ms a request under UML).
@@ -33,22 +43,14 @@ def rest(label, host, port, path, n):
     for _ in range(10 + n):  # 10 to warm up (connection, caches)
         t0 = time.perf_counter()
         s.sendall(request)
-        while b"\r\n\r\n" not in buf:
-            chunk = s.recv(65536)
-            if not chunk:
-                sys.exit("%s: connection closed" % label)
-            buf += chunk
+        buf = receive_until(s, buf, label, lambda b: b"\r\n\r\n" in b)
         head, buf = buf.split(b"\r\n\r\n", 1)
         length = 0
         for line in head.split(b"\r\n")[1:]:
             k, _, v = line.partition(b":")
             if k.strip().lower() == b"content-length":
                 length = int(v)
-        while len(buf) < length:
-            chunk = s.recv(65536)
-            if not chunk:
-                sys.exit("%s: connection closed" % label)
-            buf += chunk
+        buf = receive_until(s, buf, label, lambda b: len(b) >= length)
         body, buf = buf[:length], buf[length:]
         t1 = time.perf_counter()
         status = head.split(b" ", 2)[1]
@@ -70,11 +72,7 @@ def ascii(label, host, port, request, n):
     for k in range(1, 11 + n):
         t0 = time.perf_counter()
         s.sendall(b"[%d] %s\r\n" % (k, request.encode()))
-        while b"\n" not in buf:
-            chunk = s.recv(4096)
-            if not chunk:
-                sys.exit("%s: connection closed" % label)
-            buf += chunk
+        buf = receive_until(s, buf, label, lambda b: b"\n" in b)
         line, buf = buf.split(b"\n", 1)
         t1 = time.perf_counter()
         text = line.decode(errors="replace").strip()

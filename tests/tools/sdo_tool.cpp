@@ -161,7 +161,7 @@ int transfer(bool upload, const std::vector<std::string>& a) {
       const auto t = canopen::SteadyClock::now();
       // The first (the one printed below) is not counted: it warms up.
       if (started != canopen::TimePoint{}) ms.push_back(std::chrono::duration<double, std::milli>(t - started).count());
-      started = canopen::SteadyClock::now();
+      started = t;
       canopen::sdo::Request next = again;
       next.on_done = done;
       if (client.upload(std::move(next), started)) return;
@@ -169,14 +169,13 @@ int transfer(bool upload, const std::vector<std::string>& a) {
       r.error = make_error_code(canopen::SdoAbort::GeneralError);
     }
     if (!ms.empty()) {
-      std::vector<double> sorted = ms;
-      std::sort(sorted.begin(), sorted.end());
+      std::sort(ms.begin(), ms.end());
       const auto pick = [&](double q) {
-        return sorted[std::min(sorted.size() - 1, static_cast<std::size_t>(q * static_cast<double>(sorted.size())))];
+        return ms[std::min(ms.size() - 1, static_cast<std::size_t>(q * static_cast<double>(ms.size())))];
       };
-      std::printf("latency n=%zu mean=%.3f ms p50=%.3f p90=%.3f p99=%.3f max=%.3f\n", sorted.size(),
-                  std::accumulate(sorted.begin(), sorted.end(), 0.0) / static_cast<double>(sorted.size()), pick(0.5),
-                  pick(0.9), pick(0.99), sorted.back());
+      std::printf("latency n=%zu mean=%.3f ms p50=%.3f p90=%.3f p99=%.3f max=%.3f\n", ms.size(),
+                  std::accumulate(ms.begin(), ms.end(), 0.0) / static_cast<double>(ms.size()), pick(0.5), pick(0.9),
+                  pick(0.99), ms.back());
     }
     if (r.ok()) {
       if (upload) std::printf("ok %zu crc %04x\n", r.data.size(), canopen::sdo::crc16(r.data));

@@ -129,9 +129,8 @@ void Network::on_boot_event(const BootConfigEvent& ev) {
   const std::uint8_t node = ev.node;
   // An operational node found without a boot-up is read, not restarted.
   const bool start = it->second && !check_only;
-  std::string found_detail = ev.detail;
   // What the configurator would have done at its end, after the read.
-  auto conclude = [this, node, start, found_detail](std::error_code failed, const std::string& detail) {
+  auto conclude = [this, node, start, found_detail = ev.detail](std::error_code failed, const std::string& detail) {
     BootConfigEvent e;
     e.node = node;
     if (failed) {
